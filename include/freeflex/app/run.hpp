@@ -1,0 +1,63 @@
+#pragma once
+// The application layer: what `freeflex run` and `freeflex modes` do with a design.
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/io/design.hpp"
+#include "freeflex/io/output.hpp"
+#include "freeflex/io/plot.hpp"
+
+namespace freeflex {
+
+/// Exit codes of the command line (documented in the README).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitNumericalFailure = 1,  ///< a solver or integrator did not succeed; reason in the output
+  kExitBadInput = 2,          ///< bad design, option or file name; nothing was written
+  kExitIoFailure = 3,         ///< results could not be written
+};
+
+/// Where a run writes and how much it says.
+struct RunOptions {
+  std::string out_dir;
+  bool quiet = false;
+  std::ostream* log = nullptr;  ///< progress and tables; null: silent
+};
+
+/// Collects the files of one run and the figures that could not be drawn.
+class RunOutput {
+ public:
+  RunOutput(std::string dir, std::ostream* log) : dir_(std::move(dir)), log_(log) {}
+  void write(const std::string& name, const std::string& content);
+  void csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data);
+  /// Renders a plot (unless plots are off); a failure becomes a warning, not an error.
+  void plot(const PlotSpec& spec, bool enabled);
+  void warn(const std::string& message);
+  std::ostream* log() const { return log_; }
+  const std::string& dir() const { return dir_; }
+  const std::vector<std::string>& files() const { return files_; }
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+ private:
+  std::string dir_;
+  std::ostream* log_;
+  std::vector<std::string> files_, warnings_;
+};
+
+/// Elastic natural frequencies of a design's beam with `noa` functions.
+struct ModeTable {
+  Eigen::VectorXd omega_rad_s, freq_hz, lambda;
+};
+ModeTable mode_table(const Design& design, int noa);
+
+/// Does everything the design asks and writes DIR/summary.json last. Returns an
+/// ExitCode; throws std::runtime_error only when a file cannot be written.
+int run_design(const Design& design, const RunOptions& options);
+
+/// The [free_vibration] study; adds its results to `summary`.
+void run_free_vibration(const Design& design, RunOutput& out, Json& summary);
+
+}  // namespace freeflex

@@ -1,0 +1,58 @@
+#pragma once
+// Design files: a TOML scenario loaded into a validated struct (docs/design-files.md).
+// Keys carry their unit (length_m, bending_stiffness_Nm2); angles are degrees in files
+// and radians inside. A file is validated whole before any work: every problem is
+// collected, each naming the key, the line, what was found and what is allowed, and
+// unknown keys are errors.
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "freeflex/model/beam.hpp"
+
+namespace freeflex {
+
+/// All problems found in one design file; what() lists them, one per line.
+class DesignError : public std::runtime_error {
+ public:
+  explicit DesignError(std::vector<std::string> problems);
+  const std::vector<std::string>& problems() const { return problems_; }
+
+ private:
+  std::vector<std::string> problems_;
+};
+
+/// A mode shape to export: elastic mode `mode` (1-based) computed with `noa` functions,
+/// drawn against the exact free-free mode of the same number.
+struct ModeShapeRequest {
+  std::string name;
+  int noa = 6;
+  int mode = 1;
+  int points = 201;
+};
+
+/// [free_vibration]: frequencies for a sweep of NOA, optional mode shapes.
+struct FreeVibrationStudy {
+  std::vector<int> noa_sweep;        ///< empty: the model's noa only
+  int modes = 4;                     ///< elastic modes reported per NOA
+  bool paper_table = false;          ///< add the paper's printed Table 1 beside ours
+  std::string table_name = "frequencies";
+  std::vector<ModeShapeRequest> mode_shapes;
+};
+
+struct Design {
+  std::string source;  ///< file name, for messages
+  std::string title;
+  BeamProperties beam;
+  int noa = 6;         ///< [model] number of admissible functions
+  bool plots = true;   ///< [output] write PNG figures with gnuplot
+  std::optional<FreeVibrationStudy> free_vibration;
+};
+
+/// Reads and validates a design file. Throws DesignError (bad content, unreadable file).
+Design load_design(const std::string& path);
+/// Same, from text; `source` names it in messages.
+Design parse_design(const std::string& text, const std::string& source);
+
+}  // namespace freeflex

@@ -1,0 +1,71 @@
+#pragma once
+// The beam: geometry, piecewise-constant mass and stiffness, hub and point masses.
+//
+// Conventions (docs/theory.md section 1): SI units throughout. Positions given by a
+// user are distances `s` from the beam's left end, 0 <= s <= L. The body frame has its
+// origin at the reference point o (s = s_o) and body coordinate x = s - s_o, so the
+// beam occupies [x_left, x_right] = [-s_o, L - s_o].
+#include <optional>
+#include <vector>
+
+namespace freeflex {
+
+/// One piece of constant properties; pieces are laid end to end from the left end.
+struct BeamSegment {
+  double length_m = 0.0;
+  double mass_per_length_kg_m = 0.0;
+  double bending_stiffness_Nm2 = 0.0;
+};
+
+/// A concentrated mass (a payload) at distance s from the left end.
+struct PointMass {
+  double position_m = 0.0;
+  double mass_kg = 0.0;
+};
+
+/// Everything that defines the structure.
+struct BeamProperties {
+  std::vector<BeamSegment> segments;
+  /// Reference point o as distance from the left end; empty: the mass centre.
+  std::optional<double> reference_m;
+  double hub_mass_kg = 0.0;             ///< rigid hub at o
+  double hub_rotary_inertia_kgm2 = 0.0; ///< about o
+  std::vector<PointMass> point_masses;
+
+  /// Uniform beam of length L, total mass m and stiffness EI, o at the centre.
+  static BeamProperties uniform(double length_m, double mass_kg, double bending_stiffness_Nm2);
+};
+
+/// Validated, immutable beam. Construction throws std::invalid_argument naming the
+/// offending field when a length, mass or stiffness is not finite and positive, or a
+/// position lies outside the beam, or o is not strictly inside it.
+class Beam {
+ public:
+  explicit Beam(BeamProperties props);
+
+  const BeamProperties& properties() const { return props_; }
+  double length() const { return length_; }
+  /// Position of o from the left end.
+  double reference_s() const { return s_o_; }
+  double x_left() const { return -s_o_; }
+  double x_right() const { return length_ - s_o_; }
+  /// Body coordinate of a distance s from the left end.
+  double x_of(double s) const { return s - s_o_; }
+  /// Distributed mass and stiffness at body coordinate x (right-continuous).
+  double mass_per_length(double x) const;
+  double bending_stiffness(double x) const;
+  /// Body coordinates of the ends and of every segment junction, ascending.
+  std::vector<double> breakpoints_x() const;
+  /// Distributed mass only (no hub or point masses).
+  double distributed_mass() const;
+  /// Length-weighted mean EI, used for the non-dimensional frequency lambda.
+  double mean_bending_stiffness() const;
+
+ private:
+  const BeamSegment& segment_at(double x) const;
+  BeamProperties props_;
+  double length_ = 0.0;
+  double s_o_ = 0.0;
+};
+
+}  // namespace freeflex

@@ -1,0 +1,36 @@
+#pragma once
+// Modal integrals of the discretized beam (docs/theory.md section 3). With dm the
+// distributed mass plus point masses (and the hub at o):
+//   m = int dm, S_o = int x dm, I_o = int x^2 dm + hub rotary inertia
+//   M = int Phi^T Phi dm, Phi_bar = int Phi dm, Phi_tilde = int x Phi dm,
+//   K = int EI Phi''^T Phi'' dx
+#include <Eigen/Dense>
+
+#include "freeflex/model/basis.hpp"
+#include "freeflex/model/beam.hpp"
+#include "freeflex/model/quadrature.hpp"
+
+namespace freeflex {
+
+struct ModalIntegrals {
+  double m = 0.0;    ///< total mass [kg]
+  double S_o = 0.0;  ///< first moment of mass about o [kg m]
+  double I_o = 0.0;  ///< second moment about o, hub rotary inertia included [kg m^2]
+  Eigen::MatrixXd M;            ///< n x n elastic mass [kg]
+  Eigen::MatrixXd K;            ///< n x n stiffness [N/m]
+  Eigen::RowVectorXd Phi_bar;   ///< 1 x n [kg]
+  Eigen::RowVectorXd Phi_tilde; ///< 1 x n [kg m]
+  int size() const { return static_cast<int>(M.rows()); }
+};
+
+/// The admissible basis of a beam: two cantilevers clamped at o.
+AdmissibleBasis make_basis(const Beam& beam, int noa);
+
+/// Quadrature nodes (body x) and weights that integrate the basis products exactly to
+/// round-off: composite 20-point Gauss-Legendre on each side of o and each segment,
+/// panels no wider than 2.5 / (largest wavenumber).
+GaussRule beam_quadrature(const Beam& beam, const AdmissibleBasis& basis);
+
+ModalIntegrals modal_integrals(const Beam& beam, const AdmissibleBasis& basis);
+
+}  // namespace freeflex

@@ -1,0 +1,84 @@
+#pragma once
+// Validating reader over a toml++ table: every getter checks type and range, records
+// a problem (with key path and line) instead of throwing, and remembers which keys it
+// read so that finish() can report the unknown ones. Private to src/io.
+#include <toml++/toml.h>
+
+#include <limits>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace freeflex::io_detail {
+
+class Problems {
+ public:
+  explicit Problems(std::string source) : source_(std::move(source)) {}
+  void add(int line, const std::string& message);
+  bool empty() const { return list_.empty(); }
+  const std::vector<std::string>& list() const { return list_; }
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+  std::vector<std::string> list_;
+};
+
+/// An allowed interval for a number; bounds may be open or closed.
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false, hi_open = false;
+  static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false}; }
+  static Range nonnegative() { return {0.0, std::numeric_limits<double>::infinity(), false, false}; }
+  static Range closed(double a, double b) { return {a, b, false, false}; }
+  bool contains(double v) const;
+  std::string describe() const;  ///< "must be > 0", "must be in [1, 100]"
+};
+
+class Section {
+ public:
+  /// `table` may be null (section absent); `path` is its dotted name ("" for the root).
+  Section(const toml::table* table, std::string path, Problems& problems, int line);
+
+  bool present() const { return table_ != nullptr; }
+  int line() const { return line_; }
+  const std::string& path() const { return path_; }
+  bool has(const std::string& key) const;
+
+  std::optional<double> number(const std::string& key, const Range& range, bool required);
+  std::optional<long long> integer(const std::string& key, long long lo, long long hi, bool required);
+  std::optional<bool> boolean(const std::string& key, bool required);
+  /// A string; if `identifier`, only letters, digits, '_' and '-' (it names files).
+  std::optional<std::string> string(const std::string& key, bool required, bool identifier = false);
+  /// A string from a fixed set.
+  std::optional<std::string> choice(const std::string& key, const std::vector<std::string>& allowed,
+                                    bool required);
+  std::optional<std::vector<long long>> integer_array(const std::string& key, long long lo, long long hi,
+                                                      bool required);
+  std::optional<std::vector<double>> number_array(const std::string& key, const Range& range,
+                                                  bool required);
+  /// A sub-table ([beam.hub]); absent gives a Section with present() false.
+  Section table(const std::string& key);
+  /// An array of tables ([[beam.segment]]).
+  std::vector<Section> table_array(const std::string& key);
+
+  /// Reports every key that no getter asked for, with the keys that are allowed.
+  void finish();
+  /// Adds a problem at this section (or at `key`'s line if present).
+  void problem(const std::string& key, const std::string& message);
+  std::string key_path(const std::string& key) const;
+
+ private:
+  const toml::node* get(const std::string& key);
+  int line_of(const toml::node& n) const;
+
+  const toml::table* table_;
+  std::string path_;
+  Problems& problems_;
+  int line_;
+  std::set<std::string> asked_;
+};
+
+}  // namespace freeflex::io_detail
