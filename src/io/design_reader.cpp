@@ -8,7 +8,8 @@ namespace {
 
 std::string show(const toml::node& n) {
   std::ostringstream os;
-  n.visit([&](auto&& v) { os << v; });
+  if (n.is_string()) os << '"' << *n.value<std::string>() << '"';  // as the user typed it
+  else n.visit([&](auto&& v) { os << v; });
   std::string s = os.str();
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
@@ -27,7 +28,11 @@ void Problems::add(int line, const std::string& message) {
   os << "design '" << source_ << "'";
   if (line > 0) os << " line " << line;
   os << ": " << message;
-  list_.push_back(os.str());
+  // keep problems in file order, whatever order the sections were read in
+  auto at = list_.end();
+  while (at != list_.begin() && lines_[at - list_.begin() - 1] > line) --at;
+  lines_.insert(lines_.begin() + (at - list_.begin()), line);
+  list_.insert(at, os.str());
 }
 
 bool Range::contains(double v) const {

@@ -23,6 +23,7 @@ class Problems {
  private:
   std::string source_;
   std::vector<std::string> list_;
+  std::vector<int> lines_;  // line of each problem, for file order
 };
 
 /// An allowed interval for a number; bounds may be open or closed.

@@ -1,0 +1,90 @@
+// The command line: exit codes, messages, files written whole or not at all.
+#include <catch2/catch.hpp>
+
+#include <fstream>
+#include <sstream>
+
+#include "support/cli.hpp"
+
+using namespace freeflex_test;
+using Catch::Contains;
+
+namespace {
+const std::string kBeam = "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n";
+std::string read(const std::string& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+}  // namespace
+
+TEST_CASE("modes --format csv has the documented header and ascending frequencies", "[cli]") {
+  const std::string design = write_temp("modes", kBeam + "[model]\nnoa = 6\n");
+  const CliResult r = run_cli("modes " + design + " --format csv");
+  REQUIRE(r.exit_code == 0);
+  std::istringstream in(r.output);
+  std::string line;
+  std::getline(in, line);
+  CHECK(line == "mode,omega_rad_s,freq_hz,lambda");
+  int rows = 0;
+  double prev = 0.0;
+  while (std::getline(in, line)) {
+    ++rows;
+    double w = std::stod(line.substr(line.find(',') + 1));
+    CHECK(w > prev);
+    prev = w;
+  }
+  CHECK(rows == 6);
+  CHECK(run_cli("modes " + design + " --noa 10 --format csv").output.find("\n10,") != std::string::npos);
+  CHECK_THAT(run_cli("modes " + design + " --format json").output, Contains("\"lambda\": [4.73"));
+}
+
+TEST_CASE("bad input exits 2 with the key and line, and writes nothing", "[cli]") {
+  struct Case {
+    std::string text, expect;
+  };
+  const std::vector<Case> cases = {
+      {"[beam]\nlength_m = -1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n", "line 2: beam.length_m = -1, must be > 0"},
+      {"[beam]\nlength_m = 0\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n", "line 2: beam.length_m = 0, must be > 0"},
+      {kBeam + "[model]\nnoa = 0\n", "line 6: model.noa = 0, must be a whole number in [1, 100]"},
+      {kBeam + "[model]\nnoa = 500\n", "line 6: model.noa = 500, must be a whole number in [1, 100]"},
+      {"[beam]\nlength_m = 1\nmass_kg = \"heavy\"\nbending_stiffness_Nm2 = 1\n",
+       "line 3: beam.mass_kg = \"heavy\", must be a number"},
+      {"[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = nan\n",
+       "line 4: beam.bending_stiffness_Nm2 = nan, must be a finite number"},
+      {kBeam + "lenght_m = 2\n", "line 5: unknown key 'beam.lenght_m'"},
+  };
+  for (const auto& c : cases) {
+    const std::string design = write_temp("bad", c.text);
+    const std::string out = temp_path("out");
+    const CliResult r = run_cli("run " + design + " --out " + out);
+    INFO(r.output);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.output, Contains(c.expect));
+    CHECK_THAT(r.output, Contains("nothing was run"));
+    CHECK(!exists(out));
+  }
+  const std::string out = temp_path("out");
+  const CliResult missing = run_cli("run /nonexistent/design.toml --out " + out);
+  CHECK(missing.exit_code == 2);
+  CHECK_THAT(missing.output, Contains("design '/nonexistent/design.toml': cannot open the file"));
+  CHECK(!exists(out));
+  CHECK(run_cli("modes").exit_code == 2);
+  CHECK_THAT(run_cli("modes x.toml --noa 0").output, Contains("--noa 0: must be a whole number in [1, 100]"));
+  CHECK(run_cli("run x.toml").exit_code == 2);
+}
+
+TEST_CASE("run on the paper's Table 1 design writes table1.csv, fig3 and summary.json", "[cli][paper]") {
+  const std::string out = temp_path("table1");
+  const CliResult r = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_table1.toml --out " + out);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const std::string table = read(out + "/table1.csv");
+  CHECK(table.rfind("noa,mode,omega_rad_s,freq_hz,lambda,lambda_paper,lambda_exact\n", 0) == 0);
+  CHECK_THAT(table, Contains("\n6,4,"));
+  CHECK_THAT(read(out + "/fig3_mode4.csv"), Contains("s_m,x_m,w_freeflex,w_exact"));
+  const std::string summary = read(out + "/summary.json");
+  CHECK_THAT(summary, Contains("\"status\": \"ok\""));
+  CHECK_THAT(summary, Contains("\"max_abs_difference\""));
+}
