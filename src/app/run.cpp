@@ -1,5 +1,6 @@
 #include "freeflex/app/run.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -67,7 +68,11 @@ int run_design(const Design& design, const RunOptions& options) {
     run_free_vibration(design, out, studies);
     any = true;
   }
-  if (!any) out.warn("the design asks for no study; add [free_vibration] (see README, design keys)");
+  if (design.simulation) {
+    code = std::max(code, run_simulation(design, out, studies));
+    any = true;
+  }
+  if (!any) out.warn("the design asks for no study; add [free_vibration] or [simulation] (see README, design keys)");
   summary["status"] = code == kExitOk ? "ok" : "failed";
   summary["studies"] = studies;
   Json files = Json::array();

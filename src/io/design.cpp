@@ -1,5 +1,6 @@
 #include "freeflex/io/design.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
@@ -106,7 +107,163 @@ void read_free_vibration(Section& root, Design& d) {
   d.free_vibration = fv;
 }
 
+std::optional<ForceElement> read_element(Section& s, double length, bool& ok) {
+  ForceElement e;
+  auto name = s.string("name", true, true);
+  auto type = s.choice("type", {"force", "thruster", "torque"}, true);
+  const Range on_beam = length > 0 ? Range::closed(0.0, length) : Range::nonnegative();
+  auto pos = s.number("position_m", on_beam, true);
+  if (type && *type == "torque") {
+    if (s.has("direction")) s.problem("direction", s.key_path("direction") + " does not apply to a torque");
+    if (s.has("follow_slope")) s.problem("follow_slope", s.key_path("follow_slope") + " applies to thrusters only");
+    s.number_array("direction", Range(), false);
+    s.boolean("follow_slope", false);
+  } else {
+    auto dir = s.number_array("direction", Range(), true);
+    if (dir && dir->size() != 2) {
+      s.problem("direction", s.key_path("direction") + " must have two components [x, y], got " +
+                                 std::to_string(dir->size()));
+      dir.reset();
+    }
+    if (dir) e.direction = Eigen::Vector2d((*dir)[0], (*dir)[1]);
+    else ok = false;
+    if (type && *type == "force" && s.has("follow_slope"))
+      s.problem("follow_slope", s.key_path("follow_slope") + " applies to thrusters only");
+    e.follow_slope = s.boolean("follow_slope", false).value_or(false);
+  }
+  if (!name || !type || !pos) {
+    ok = false;
+    return std::nullopt;
+  }
+  e.name = *name;
+  e.type = *type == "force" ? ForceElement::Type::Force
+           : *type == "thruster" ? ForceElement::Type::Thruster
+                                 : ForceElement::Type::Torque;
+  e.position_m = *pos;
+  return e;
+}
+
+std::optional<TimeProfile> read_profile(Section& load) {
+  Section p = load.table("profile");
+  if (!p.present()) {
+    load.problem("profile", load.key_path("profile") + " is required ([" + load.path().substr(0, load.path().find('[')) +
+                                ".profile] with type, times_s, values)");
+    return std::nullopt;
+  }
+  auto type = p.choice("type", {"steps", "linear"}, true);
+  auto times = p.number_array("times_s", Range::nonnegative(), true);
+  auto values = p.number_array("values", Range(), true);
+  p.finish();
+  if (!type || !times || !values) return std::nullopt;
+  for (std::size_t i = 1; i < times->size(); ++i)
+    if (!((*times)[i] > (*times)[i - 1])) {
+      std::ostringstream os;
+      os << p.key_path("times_s") << " must be strictly increasing: entry " << i + 1 << " (" << (*times)[i]
+         << ") does not exceed entry " << i << " (" << (*times)[i - 1] << ")";
+      p.problem("times_s", os.str());
+      return std::nullopt;
+    }
+  if (times->size() < 2) {
+    p.problem("times_s", p.key_path("times_s") + " needs at least two times");
+    return std::nullopt;
+  }
+  const bool steps = *type == "steps";
+  const std::size_t expect = steps ? times->size() - 1 : times->size();
+  if (values->size() != expect) {
+    p.problem("values", p.key_path("values") + " has " + std::to_string(values->size()) + " entries, must have " +
+                            std::to_string(expect) + (steps ? " (one per interval between times_s)" : " (one per time)"));
+    return std::nullopt;
+  }
+  return TimeProfile(steps ? TimeProfile::Kind::Steps : TimeProfile::Kind::Linear, *times, *values);
+}
+
+double beam_length(const Design& d) {
+  double L = 0.0;
+  for (const auto& s : d.beam.segments) L += s.length_m;
+  return L;
+}
+
+void read_loads_and_actuators(Section& root, Design& d) {
+  const double L = beam_length(d);
+  std::vector<std::pair<std::string, Section*>> names;
+  auto loads = root.table_array("load");
+  auto acts = root.table_array("actuator");
+  for (auto& s : loads) {
+    bool ok = true;
+    auto e = read_element(s, L, ok);
+    auto prof = read_profile(s);
+    s.finish();
+    if (e && ok && prof) d.loads.push_back({*e, *prof});
+  }
+  for (auto& s : acts) {
+    bool ok = true;
+    auto e = read_element(s, L, ok);
+    const double limit = s.number("limit", Range::positive(), false).value_or(0.0);
+    s.finish();
+    if (e && ok) d.actuators.push_back({*e, limit});
+  }
+  std::vector<std::string> seen;
+  auto check_name = [&](const ForceElement& e, Section& s) {
+    if (std::find(seen.begin(), seen.end(), e.name) != seen.end())
+      s.problem("name", s.key_path("name") + " = \"" + e.name + "\" is used twice; load and actuator names must be unique");
+    seen.push_back(e.name);
+  };
+  for (std::size_t i = 0, k = 0; i < loads.size() && k < d.loads.size(); ++i)
+    if (loads[i].has("name")) check_name(d.loads[k++].element, loads[i]);
+  for (std::size_t i = 0, k = 0; i < acts.size() && k < d.actuators.size(); ++i)
+    if (acts[i].has("name")) check_name(d.actuators[k++].element, acts[i]);
+}
+
+void read_damping(Section& root, Design& d) {
+  Section s = root.table("damping");
+  if (!s.present()) return;
+  if (auto r = s.number_array("ratios", Range{0.0, 1.0, false, true}, true)) d.damping_ratios = *r;
+  s.finish();
+}
+
+void read_simulation(Section& root, Design& d) {
+  Section s = root.table("simulation");
+  if (!s.present()) return;
+  SimulationStudy st;
+  SimulationOptions& o = st.options;
+  auto dur = s.number("duration_s", Range::positive(), true);
+  if (dur) o.duration_s = *dur;
+  o.output_step_s = s.number("output_step_s", Range::positive(), false).value_or(o.duration_s / 600.0);
+  if (dur && o.output_step_s > o.duration_s)
+    s.problem("output_step_s", s.key_path("output_step_s") + " must not exceed duration_s");
+  o.trajectory_step_s = s.number("trajectory_step_s", Range::positive(), false).value_or(1e-3);
+  o.integrator.rtol = s.number("rtol", Range{0.0, 1.0, true, true}, false).value_or(1e-8);
+  o.integrator.atol = s.number("atol", Range::positive(), false).value_or(1e-10);
+  o.integrator.max_step = s.number("max_step_s", Range::nonnegative(), false).value_or(0.0);
+  const std::string method = s.choice("method", {"bdf", "adams"}, false).value_or("bdf");
+  o.integrator.method = method == "adams" ? IntegratorOptions::Method::Adams : IntegratorOptions::Method::Bdf;
+  st.nonlinear = s.boolean("nonlinear", false).value_or(true);
+  st.perturbation = s.boolean("perturbation", false).value_or(true);
+  if (!st.nonlinear && !st.perturbation)
+    s.problem("nonlinear", s.key_path("nonlinear") + " and perturbation are both false: nothing to simulate");
+  st.rigid_figure = s.string("rigid_figure", false, true).value_or(st.rigid_figure);
+  st.elastic_figure = s.string("elastic_figure", false, true).value_or(st.elastic_figure);
+  s.finish();
+  if (d.loads.empty() && d.actuators.empty())
+    s.problem("duration_s", "[simulation] needs at least one [[load]] to respond to");
+  d.simulation = st;
+}
+
 }  // namespace
+
+std::vector<ForceElement> Design::force_elements() const {
+  std::vector<ForceElement> e;
+  for (const auto& l : loads) e.push_back(l.element);
+  for (const auto& a : actuators) e.push_back(a.element);
+  return e;
+}
+
+Excitation Design::excitation() const {
+  Excitation ex;
+  for (const auto& l : loads) ex.profiles.emplace_back(l.profile);
+  for (std::size_t i = 0; i < actuators.size(); ++i) ex.profiles.emplace_back(std::nullopt);
+  return ex;
+}
 
 DesignError::DesignError(std::vector<std::string> problems)
     : std::runtime_error(join_lines(problems)), problems_(std::move(problems)) {}
@@ -133,6 +290,9 @@ Design parse_design(const std::string& text, const std::string& source) {
   d.plots = out.boolean("plots", false).value_or(true);
   out.finish();
   read_free_vibration(root, d);
+  read_loads_and_actuators(root, d);
+  read_damping(root, d);
+  read_simulation(root, d);
   root.finish();
   if (problems.empty()) {
     try {

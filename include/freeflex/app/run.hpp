@@ -59,5 +59,7 @@ int run_design(const Design& design, const RunOptions& options);
 
 /// The [free_vibration] study; adds its results to `summary`.
 void run_free_vibration(const Design& design, RunOutput& out, Json& summary);
+/// The [simulation] study; returns an ExitCode.
+int run_simulation(const Design& design, RunOutput& out, Json& summary);
 
 }  // namespace freeflex

@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "freeflex/model/beam.hpp"
+#include "freeflex/model/loads.hpp"
+#include "freeflex/sim/simulate.hpp"
 
 namespace freeflex {
 
@@ -41,13 +43,43 @@ struct FreeVibrationStudy {
   std::vector<ModeShapeRequest> mode_shapes;
 };
 
+/// A load: a force element driven by a time profile ([[load]]).
+struct LoadSpec {
+  ForceElement element;
+  TimeProfile profile;
+};
+
+/// An actuator: a force element driven by a controller ([[actuator]]).
+struct ActuatorSpec {
+  ForceElement element;
+  double limit = 0.0;  ///< |u| <= limit (N or N m); 0: unbounded
+};
+
+/// [simulation]: forced response with the full and the perturbation models.
+struct SimulationStudy {
+  SimulationOptions options;
+  bool nonlinear = true;
+  bool perturbation = true;
+  std::string rigid_figure = "rigid_motion";
+  std::string elastic_figure = "generalized_displacements";
+};
+
 struct Design {
   std::string source;  ///< file name, for messages
   std::string title;
   BeamProperties beam;
   int noa = 6;         ///< [model] number of admissible functions
   bool plots = true;   ///< [output] write PNG figures with gnuplot
+  std::vector<LoadSpec> loads;
+  std::vector<ActuatorSpec> actuators;
+  std::vector<double> damping_ratios;  ///< [damping] ratios, per elastic mode
   std::optional<FreeVibrationStudy> free_vibration;
+  std::optional<SimulationStudy> simulation;
+
+  /// Force elements: loads first, then actuators (the order of the commands vector).
+  std::vector<ForceElement> force_elements() const;
+  /// The loads' profiles in that order (actuators have none).
+  Excitation excitation() const;
 };
 
 /// Reads and validates a design file. Throws DesignError (bad content, unreadable file).

@@ -1,0 +1,69 @@
+// Benchmark (not a test): the paper's moment example (M_z = +-1 N m pulse at the
+// centre of the 1 m, 1 kg, EI = 1 beam) to 3 s at rtol 1e-8, atol 1e-10, for NOA = 6
+// and 20, with the full nonlinear model and the perturbation solution, BDF and Adams.
+// Reports wall time per simulation and the right-hand-side evaluation count.
+// Goal (issue 3): under 20 ms for NOA = 6.
+//   cmake -S . -B build-bench -DFREEFLEX_BUILD_BENCHMARKS=ON && cmake --build build-bench
+//   build-bench/bench/bench_simulation
+#include <benchmark/benchmark.h>
+
+#include "freeflex/sim/simulate.hpp"
+
+using namespace freeflex;
+
+namespace {
+
+struct Case {
+  FlexibleBody body;
+  Excitation ex;
+  SimulationOptions opt;
+};
+
+Case moment_case(int noa, IntegratorOptions::Method method) {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  Case c{FlexibleBody(beam, noa, {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}}),
+         Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0})}}, SimulationOptions{}};
+  c.opt.duration_s = 3.0;
+  c.opt.output_step_s = 0.01;
+  c.opt.integrator.rtol = 1e-8;
+  c.opt.integrator.atol = 1e-10;
+  c.opt.integrator.method = method;
+  return c;
+}
+
+IntegratorOptions::Method method_of(int64_t m) {
+  return m == 0 ? IntegratorOptions::Method::Bdf : IntegratorOptions::Method::Adams;
+}
+
+void BM_full(benchmark::State& state) {
+  const Case c = moment_case(static_cast<int>(state.range(0)), method_of(state.range(1)));
+  SimulationResult r;
+  for (auto _ : state) {
+    r = simulate_full(c.body, c.ex, c.opt);
+    benchmark::DoNotOptimize(r.z.data());
+  }
+  if (!r.ok) state.SkipWithError(r.message.c_str());
+  state.counters["rhs_evals"] = static_cast<double>(r.rhs_evaluations);
+  state.counters["steps"] = static_cast<double>(r.steps);
+  state.SetLabel(state.range(1) == 0 ? "bdf" : "adams");
+}
+
+void BM_perturbation(benchmark::State& state) {
+  const Case c = moment_case(static_cast<int>(state.range(0)), method_of(state.range(1)));
+  PerturbationResult r;
+  for (auto _ : state) {
+    r = simulate_perturbation(c.body, c.ex, c.opt);
+    benchmark::DoNotOptimize(r.total.z.data());
+  }
+  if (!r.total.ok) state.SkipWithError(r.total.message.c_str());
+  state.counters["rhs_evals"] = static_cast<double>(r.total.rhs_evaluations);
+  state.counters["zero_order_rhs"] = static_cast<double>(r.zero_order.rhs_evaluations);
+  state.counters["first_order_rhs"] = static_cast<double>(r.first_order_rhs_evaluations);
+  state.SetLabel(state.range(1) == 0 ? "bdf" : "adams");
+}
+
+}  // namespace
+
+BENCHMARK(BM_full)->ArgsProduct({{6, 20}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_perturbation)->ArgsProduct({{6, 20}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK_MAIN();

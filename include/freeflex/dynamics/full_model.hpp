@@ -1,0 +1,47 @@
+#pragma once
+// The full nonlinear (hybrid, discretized) model, eq. 6.2: Lagrange's equations of the
+// beam with z = [Rx, Ry, theta, q] and state x = [z, z'] (size 2(3+n)).
+#include <Eigen/Dense>
+
+#include "freeflex/dynamics/flexible_body.hpp"
+
+namespace freeflex {
+
+class FullModel {
+ public:
+  /// Scratch space for one thread of evaluation (make one with create_data()).
+  struct Data {
+    Eigen::MatrixXd Mz;
+    Eigen::VectorXd G, b;
+    Eigen::LLT<Eigen::MatrixXd> llt;
+  };
+
+  explicit FullModel(const FlexibleBody& body) : body_(body) {}
+  const FlexibleBody& body() const { return body_; }
+  int state_size() const { return 2 * body_.dofs(); }
+  Data create_data() const;
+
+  /// Residual of eq. 6.2, 𝕄 z'' + h(z, z') + [0; 0; K q] + D z' - G(z, u): zero on the motion.
+  Eigen::VectorXd residual(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
+                           const Eigen::Ref<const Eigen::VectorXd>& z_ddot,
+                           const Eigen::Ref<const Eigen::VectorXd>& commands) const;
+
+  /// x' for x = [z, z'] under element commands u. Returns false if the mass matrix is
+  /// not positive definite (the state has left the model's validity).
+  bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
+           Eigen::Ref<Eigen::VectorXd> x_dot) const;
+
+  /// Invariants with no load (eq. 6.7): T + V, linear momentum, angular momentum about
+  /// the inertial origin.
+  double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  Eigen::Vector2d linear_momentum(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  double angular_momentum(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+
+ private:
+  /// h(z, z') + [0; 0; K q] + D z': everything in eq. 6.2 but inertia and loads.
+  void bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
+            Eigen::Ref<Eigen::VectorXd> out) const;
+  const FlexibleBody& body_;
+};
+
+}  // namespace freeflex

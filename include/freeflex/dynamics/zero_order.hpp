@@ -1,0 +1,69 @@
+#pragma once
+// Zero-order (rigid) model, eq. 6.3 with q = 0, and the rigid trajectory that the
+// first-order model is built about.
+#include <memory>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/dynamics/flexible_body.hpp"
+
+namespace freeflex {
+
+/// Rigid motion at one instant: position, rate and acceleration of (Rx, Ry, theta).
+struct RigidState {
+  Eigen::Vector3d pos = Eigen::Vector3d::Zero();  ///< [Rx, Ry, theta]
+  Eigen::Vector3d vel = Eigen::Vector3d::Zero();
+  Eigen::Vector3d acc = Eigen::Vector3d::Zero();
+};
+
+/// The zero-order equations: 𝕄_rr(θ) [R''; θ''] = [F + θ'² C s0; M_o] at q = 0.
+/// State x0 = [Rx, Ry, theta, Rx', Ry', theta'].
+class ZeroOrderModel {
+ public:
+  explicit ZeroOrderModel(const FlexibleBody& body) : body_(body) {}
+  const FlexibleBody& body() const { return body_; }
+  /// [R''; θ''] at state x0 under element commands.
+  Eigen::Vector3d acceleration(const Eigen::Ref<const Eigen::VectorXd>& x0,
+                               const Eigen::Ref<const Eigen::VectorXd>& commands) const;
+  void rhs(const Eigen::Ref<const Eigen::VectorXd>& x0, const Eigen::Ref<const Eigen::VectorXd>& commands,
+           Eigen::Ref<Eigen::VectorXd> x0_dot) const;
+
+ private:
+  const FlexibleBody& body_;
+};
+
+/// A rigid maneuver R0(t), θ0(t) with its first and second derivatives, from a
+/// simulation or an optimizer. Accelerations may jump at breakpoints; `at` uses the
+/// piece containing Instant::piece_mid.
+class RigidTrajectory {
+ public:
+  virtual ~RigidTrajectory() = default;
+  virtual RigidState at(const Instant& when) const = 0;
+  virtual double t_begin() const = 0;
+  virtual double t_end() const = 0;
+  /// Times where the acceleration may jump (pieces of the timeline).
+  virtual std::vector<double> breakpoints() const = 0;
+};
+
+/// Samples (t, pos, vel, acc) on each smooth piece, interpolated by quintic Hermite
+/// polynomials (position, rate and acceleration matched at both ends of an interval):
+/// error O(h^6) in position, O(h^4) in acceleration.
+class SampledRigidTrajectory : public RigidTrajectory {
+ public:
+  struct Piece {
+    std::vector<double> t;               ///< ascending, at least two
+    std::vector<RigidState> samples;     ///< one per t
+  };
+  /// Pieces must be in time order, each starting where the previous one ends.
+  explicit SampledRigidTrajectory(std::vector<Piece> pieces);
+  RigidState at(const Instant& when) const override;
+  double t_begin() const override { return pieces_.front().t.front(); }
+  double t_end() const override { return pieces_.back().t.back(); }
+  std::vector<double> breakpoints() const override;
+
+ private:
+  std::vector<Piece> pieces_;
+};
+
+}  // namespace freeflex

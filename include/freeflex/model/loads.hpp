@@ -1,0 +1,64 @@
+#pragma once
+// Loads and actuators (docs/theory.md section 6): point forces with inertial components,
+// thrusters fixed to the body (optionally following the local slope), point torques.
+// Each is a "force element" whose scalar command (N or N m) scales a direction; a load
+// takes its command from a time profile, an actuator from a controller.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/model/instant.hpp"
+
+namespace freeflex {
+
+/// A command as a function of time: piecewise-constant steps or piecewise-linear, zero
+/// outside [times.front(), times.back()].
+class TimeProfile {
+ public:
+  enum class Kind { Steps, Linear };
+  /// Steps: values[i] on [times[i], times[i+1]) (the last one closed); values.size() ==
+  /// times.size() - 1. Linear: values at the times, interpolated; same sizes.
+  /// Throws std::invalid_argument if times are not strictly ascending or sizes disagree.
+  TimeProfile(Kind kind, std::vector<double> times, std::vector<double> values);
+
+  /// Value with the formula of the piece containing piece_mid (see Instant).
+  double value(const Instant& at) const;
+  double value(double t) const { return value(Instant::at(t)); }
+  Kind kind() const { return kind_; }
+  const std::vector<double>& times() const { return times_; }
+  const std::vector<double>& values() const { return values_; }
+
+ private:
+  Kind kind_;
+  std::vector<double> times_, values_;
+};
+
+/// Where and how a command acts on the beam.
+struct ForceElement {
+  enum class Type {
+    Force,     ///< point force, direction in inertial axes X, Y
+    Thruster,  ///< point force, direction in body axes x, y (follows theta)
+    Torque,    ///< point torque about the plane's normal; direction unused
+  };
+  std::string name;
+  Type type = Type::Force;
+  double position_m = 0.0;                     ///< distance from the left end
+  Eigen::Vector2d direction{0.0, 1.0};         ///< force per unit command
+  bool follow_slope = false;                   ///< thruster turns with the local slope theta + u'
+};
+
+/// The commands of every force element over time: element e follows profiles[e] when it
+/// has one (a load) and is zero otherwise (an actuator without a controller).
+struct Excitation {
+  std::vector<std::optional<TimeProfile>> profiles;
+  /// commands(e) for every element; `commands` must have profiles.size() entries.
+  void evaluate(const Instant& at, Eigen::Ref<Eigen::VectorXd> commands) const;
+  /// Every profile time: where some command may jump or kink.
+  std::vector<double> breakpoints() const;
+  /// Latest profile time (0 if there is none): no load acts after it.
+  double end_time() const;
+};
+
+}  // namespace freeflex

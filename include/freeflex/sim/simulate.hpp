@@ -1,0 +1,56 @@
+#pragma once
+// Simulations of the three models (docs/theory.md section 8). Every run starts at rest
+// at the origin unless an initial state is given, and reports totals z = [Rx, Ry, θ, q]
+// and rates at the output times.
+#include <memory>
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "freeflex/dynamics/first_order.hpp"
+#include "freeflex/dynamics/full_model.hpp"
+#include "freeflex/dynamics/zero_order.hpp"
+#include "freeflex/sim/integrator.hpp"
+
+namespace freeflex {
+
+struct SimulationOptions {
+  IntegratorOptions integrator;
+  double duration_s = 3.0;       ///< from t = 0
+  double output_step_s = 0.005;  ///< spacing of the output times
+  /// Spacing of the samples of the zero-order motion handed to the first-order model
+  /// (quintic Hermite between samples); the output step if smaller.
+  double trajectory_step_s = 1e-3;
+};
+
+struct SimulationResult {
+  bool ok = false;
+  std::string message;     ///< reason of a failure, with the time reached
+  Eigen::VectorXd t;       ///< output times reached
+  Eigen::MatrixXd z;       ///< totals [Rx, Ry, θ, q], one row per time
+  Eigen::MatrixXd z_dot;   ///< their rates
+  long rhs_evaluations = 0;
+  long steps = 0;
+  double wall_time_s = 0.0;
+};
+
+/// Output times 0, dt, 2 dt, ..., duration (the last one exactly).
+std::vector<double> output_times(const SimulationOptions& options);
+
+/// Full nonlinear model (eq. 6.2) under the excitation's commands.
+SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excitation, const SimulationOptions& options,
+                               const Eigen::VectorXd& x_initial = Eigen::VectorXd());
+
+struct PerturbationResult {
+  SimulationResult total;       ///< R0 + R1, θ0 + θ1, q (and rates)
+  SimulationResult zero_order;  ///< the rigid motion alone (q columns zero)
+  std::shared_ptr<SampledRigidTrajectory> nominal;  ///< what the first-order model used
+  long first_order_rhs_evaluations = 0;
+};
+
+/// Zero-order simulation, its rigid trajectory, then the first-order simulation about it
+/// with u1 = 0 (eq. 7.3). The excitation is the nominal (zero-order) loading.
+PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitation& excitation,
+                                         const SimulationOptions& options);
+
+}  // namespace freeflex

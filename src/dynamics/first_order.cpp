@@ -1,0 +1,106 @@
+#include "freeflex/dynamics/first_order.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace freeflex {
+namespace {
+Eigen::Matrix2d rot(double a) {
+  Eigen::Matrix2d C;
+  C << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+  return C;
+}
+const Eigen::Matrix2d kJ = (Eigen::Matrix2d() << 0.0, -1.0, 1.0, 0.0).finished();
+}  // namespace
+
+FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory& nominal,
+                                 CommandFunction nominal_commands, std::vector<int> inputs)
+    : body_(body), nominal_(nominal), commands_(std::move(nominal_commands)), inputs_(std::move(inputs)) {
+  const int ne = static_cast<int>(body_.elements().size());
+  for (int i : inputs_)
+    if (i < 0 || i >= ne)
+      throw std::invalid_argument("first-order model: input index " + std::to_string(i) + " is not an element (0.." +
+                                  std::to_string(ne - 1) + ")");
+}
+
+void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
+  const ModalIntegrals& mi = body_.integrals();
+  const int n = body_.n(), N = body_.dofs();
+  const RigidState r = nominal_.at(at);
+  const double th = r.pos(2), thd = r.vel(2), thdd = r.acc(2);
+  const Eigen::Vector2d Rdd = r.acc.head<2>();
+  const Eigen::Matrix2d C = rot(th);
+  const Eigen::Vector2d s0(mi.S_o, 0.0);
+  const Eigen::Vector2d Ce1 = C.col(0), Ce2 = C.col(1), CJe2 = -Ce1;  // J e2 = -e1
+  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
+
+  Eigen::VectorXd u0(body_.elements().size());
+  commands_(at, u0);
+  Eigen::VectorXd G(N);
+  Eigen::MatrixXd dG;
+  body_.generalized_force(th, q0, u0, G, &dG);
+
+  o.M0.resize(N, N);
+  body_.mass_matrix(th, q0, o.M0);
+
+  // ∂(residual)/∂z at the nominal motion (eq. 7.1); columns Rx, Ry do not appear.
+  Eigen::MatrixXd Kr = Eigen::MatrixXd::Zero(N, N);
+  Kr.block<2, 1>(0, 2) = -thdd * (C * s0) - thd * thd * (C * kJ * s0);
+  Kr(2, 2) = -Rdd.dot(C * s0);
+  Kr.block(3, 2, n, 1) = -mi.Phi_bar.transpose() * Ce1.dot(Rdd);
+  Kr.block(0, 3, 2, n) = (thdd * CJe2 - thd * thd * Ce2) * mi.Phi_bar;
+  Kr.block(2, 3, 1, n) = Rdd.dot(CJe2) * mi.Phi_bar;
+  Kr.bottomRightCorner(n, n) = mi.K - thd * thd * mi.M;
+  Kr.middleCols(2, 1 + n) -= dG;  // configuration-dependent loads
+
+  // ∂(residual)/∂z'
+  Eigen::MatrixXd Cr = Eigen::MatrixXd::Zero(N, N);
+  Cr.block<2, 1>(0, 2) = -2.0 * thd * (C * s0);
+  Cr.block(0, 3, 2, n) = 2.0 * thd * CJe2 * mi.Phi_bar;
+  if (body_.damped()) Cr += body_.damping();
+
+  o.Kt = -Kr;
+  o.Ct = -Cr;
+  o.Gu.resize(N, input_size());
+  Eigen::VectorXd g(N);
+  for (int k = 0; k < input_size(); ++k) {
+    body_.element_force(inputs_[k], th, q0, g);
+    o.Gu.col(k) = g;
+  }
+  // r0 = G - 𝕄0 z0'' - h(z0, z0'): its q rows are the forcing of the vibration; its rigid
+  // rows vanish when the trajectory satisfies eq. 6.3 exactly.
+  Eigen::VectorXd zdd0 = Eigen::VectorXd::Zero(N);
+  zdd0.head<3>() = r.acc;
+  o.r0 = G - o.M0 * zdd0;
+  o.r0.head<2>() += thd * thd * (C * s0);
+}
+
+void FirstOrderModel::state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
+                                  Eigen::VectorXd& g) const {
+  const int N = body_.dofs();
+  Implicit o;
+  implicit_form(at, o);
+  const Eigen::LLT<Eigen::MatrixXd> llt(o.M0);
+  A.setZero(2 * N, 2 * N);
+  A.topRightCorner(N, N).setIdentity();
+  A.bottomLeftCorner(N, N) = llt.solve(o.Kt);
+  A.bottomRightCorner(N, N) = llt.solve(o.Ct);
+  B.setZero(2 * N, input_size());
+  B.bottomRows(N) = llt.solve(o.Gu);
+  g.setZero(2 * N);
+  g.tail(N) = llt.solve(o.r0);
+}
+
+void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
+                          const Eigen::Ref<const Eigen::VectorXd>& u1, Eigen::Ref<Eigen::VectorXd> x1_dot) const {
+  const int N = body_.dofs();
+  Implicit o;
+  implicit_form(at, o);
+  x1_dot.head(N) = x1.tail(N);
+  Eigen::VectorXd f = o.Kt * x1.head(N) + o.Ct * x1.tail(N) + o.r0;
+  if (u1.size() > 0) f.noalias() += o.Gu * u1;
+  x1_dot.tail(N) = o.M0.llt().solve(f);
+}
+
+}  // namespace freeflex

@@ -1,0 +1,148 @@
+#include "freeflex/dynamics/flexible_body.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace freeflex {
+namespace {
+
+Eigen::Matrix2d rot(double a) {
+  Eigen::Matrix2d C;
+  C << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+  return C;
+}
+const Eigen::Matrix2d kJ = (Eigen::Matrix2d() << 0.0, -1.0, 1.0, 0.0).finished();
+
+}  // namespace
+
+FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> elements,
+                           std::vector<double> damping_ratios)
+    : beam_(beam), basis_(make_basis(beam, noa)), mi_(modal_integrals(beam_, basis_)), elements_(std::move(elements)) {
+  for (const auto& e : elements_) {
+    if (!std::isfinite(e.position_m) || e.position_m < 0.0 || e.position_m > beam_.length()) {
+      std::ostringstream os;
+      os << "force element '" << e.name << "': position_m = " << e.position_m << ", must lie on the beam [0, "
+         << beam_.length() << "]";
+      throw std::invalid_argument(os.str());
+    }
+    const double x = beam_.x_of(e.position_m);
+    const BasisValues v = basis_.evaluate(x);
+    x_.push_back(x);
+    phi_.push_back(v.phi);
+    dphi_.push_back(v.dphi);
+  }
+  const int n = basis_.size(), N = 3 + n;
+  // Schur complement of the rigid block of the rest mass matrix (eq. 6.8).
+  Eigen::MatrixXd M0(N, N);
+  mass_matrix(0.0, Eigen::VectorXd::Zero(n), M0);
+  M_condensed_ = mi_.M - M0.block(3, 0, n, 3) * M0.topLeftCorner<3, 3>().ldlt().solve(M0.block(0, 3, 3, n));
+  D_.setZero(N, N);
+  for (double z : damping_ratios)
+    if (!(z >= 0.0) || !std::isfinite(z)) throw std::invalid_argument("damping ratio must be finite and >= 0");
+  if (!damping_ratios.empty()) {
+    // D = 𝕄0 V diag(2 zeta omega) Vᵀ 𝕄0 over the mass-normalized elastic modes at rest:
+    // it damps mode i at ratio zeta_i and exerts no force on rigid motion.
+    Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(N, N);
+    K0.bottomRightCorner(n, n) = mi_.K;
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K0, M0);
+    for (int i = 0; i < static_cast<int>(damping_ratios.size()) && i < n; ++i) {
+      const double omega = std::sqrt(std::max(0.0, es.eigenvalues()(3 + i)));
+      const Eigen::VectorXd Mv = M0 * es.eigenvectors().col(3 + i);
+      D_.noalias() += (2.0 * damping_ratios[i] * omega) * Mv * Mv.transpose();
+      damped_ = damped_ || damping_ratios[i] > 0.0;
+    }
+  }
+}
+
+int FlexibleBody::element_index(const std::string& name) const {
+  for (std::size_t i = 0; i < elements_.size(); ++i)
+    if (elements_[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+void FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                               Eigen::Ref<Eigen::MatrixXd> out) const {
+  const int n = this->n();
+  const Eigen::Matrix2d C = rot(theta);
+  const Eigen::Vector2d s(mi_.S_o, mi_.Phi_bar.dot(q));  // s(q) = ∫p dm, eq. 3.3
+  out.setZero();
+  out(0, 0) = out(1, 1) = mi_.m;
+  const Eigen::Vector2d MRth = C * kJ * s;                 // C J s
+  const Eigen::Vector2d Ce2 = C.col(1);                    // C e2
+  out.block<2, 1>(0, 2) = MRth;
+  out.block<1, 2>(2, 0) = MRth.transpose();
+  out.block(0, 3, 2, n) = Ce2 * mi_.Phi_bar;
+  out.block(3, 0, n, 2) = (Ce2 * mi_.Phi_bar).transpose();
+  out(2, 2) = mi_.I_o + q.dot(mi_.M * q);
+  out.block(2, 3, 1, n) = mi_.Phi_tilde;
+  out.block(3, 2, n, 1) = mi_.Phi_tilde.transpose();
+  out.bottomRightCorner(n, n) = mi_.M;
+}
+
+void FlexibleBody::element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                 Eigen::Ref<Eigen::VectorXd> g, Eigen::MatrixXd* d) const {
+  const int n = this->n();
+  const ForceElement& el = elements_[e];
+  const Eigen::RowVectorXd& phi = phi_[e];
+  const Eigen::RowVectorXd& dphi = dphi_[e];
+  g.setZero();
+  if (d) d->setZero(3 + n, 1 + n);
+  if (el.type == ForceElement::Type::Torque) {
+    // virtual rotation at x_a is δθ + Φ'(x_a) δq (eq. 6.4c)
+    g(2) = 1.0;
+    g.tail(n) = dphi.transpose();
+    return;
+  }
+  // Inertial force f(theta, q) and its derivatives (eq. 6.4a, 6.4b).
+  Eigen::Vector2d f, df_dth = Eigen::Vector2d::Zero();
+  Eigen::MatrixXd df_dq = Eigen::MatrixXd::Zero(2, n);
+  if (el.type == ForceElement::Type::Force) {
+    f = el.direction;
+  } else {
+    const double psi = theta + (el.follow_slope ? dphi.dot(q) : 0.0);
+    const Eigen::Matrix2d Cp = rot(psi);
+    f = Cp * el.direction;
+    df_dth = Cp * kJ * el.direction;
+    if (el.follow_slope) df_dq = df_dth * dphi;
+  }
+  // Body components w = Cᵀ f; then M_o = wᵀ J p = -w_x u_a + w_y x_a, Q = Φ_aᵀ w_y.
+  const Eigen::Matrix2d C = rot(theta);
+  const double xa = x_[e], ua = phi.dot(q);
+  const Eigen::Vector2d w = C.transpose() * f;
+  g.head<2>() = f;
+  g(2) = -w(0) * ua + w(1) * xa;
+  g.tail(n) = phi.transpose() * w(1);
+  if (!d) return;
+  const Eigen::Vector2d dw_dth = kJ.transpose() * w + C.transpose() * df_dth;
+  const Eigen::MatrixXd dw_dq = C.transpose() * df_dq;
+  d->block<2, 1>(0, 0) = df_dth;
+  d->block(0, 1, 2, n) = df_dq;
+  (*d)(2, 0) = -dw_dth(0) * ua + dw_dth(1) * xa;
+  d->block(2, 1, 1, n) = -ua * dw_dq.row(0) - w(0) * phi + xa * dw_dq.row(1);
+  d->block(3, 0, n, 1) = phi.transpose() * dw_dth(1);
+  d->block(3, 1, n, n) = phi.transpose() * dw_dq.row(1);
+}
+
+void FlexibleBody::generalized_force(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                     const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G,
+                                     Eigen::MatrixXd* d) const {
+  const int N = dofs();
+  G.setZero();
+  if (d) d->setZero(N, 1 + n());
+  Eigen::VectorXd g(N);
+  Eigen::MatrixXd dg;
+  for (int e = 0; e < static_cast<int>(elements_.size()); ++e) {
+    if (commands(e) == 0.0) continue;
+    element_force(e, theta, q, g, d ? &dg : nullptr);
+    G += commands(e) * g;
+    if (d) *d += commands(e) * dg;
+  }
+}
+
+double FlexibleBody::vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                      const Eigen::Ref<const Eigen::VectorXd>& q_dot) const {
+  return 0.5 * q_dot.dot(M_condensed_ * q_dot) + 0.5 * q.dot(mi_.K * q);
+}
+
+}  // namespace freeflex

@@ -1,0 +1,89 @@
+#include "freeflex/dynamics/zero_order.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace freeflex {
+
+Eigen::Vector3d ZeroOrderModel::acceleration(const Eigen::Ref<const Eigen::VectorXd>& x0,
+                                             const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  const ModalIntegrals& mi = body_.integrals();
+  const int n = body_.n();
+  const double th = x0(2), thd = x0(5), c = std::cos(th), s = std::sin(th);
+  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd G(body_.dofs());
+  body_.generalized_force(th, q0, commands, G);
+  // eq. 6.3: C J s0 = S_o [-sin, cos], C s0 = S_o [cos, sin]
+  Eigen::Matrix3d Mrr;
+  Mrr << mi.m, 0.0, -mi.S_o * s,  //
+      0.0, mi.m, mi.S_o * c,      //
+      -mi.S_o * s, mi.S_o * c, mi.I_o;
+  const Eigen::Vector3d rhs(G(0) + thd * thd * mi.S_o * c, G(1) + thd * thd * mi.S_o * s, G(2));
+  return Mrr.ldlt().solve(rhs);
+}
+
+void ZeroOrderModel::rhs(const Eigen::Ref<const Eigen::VectorXd>& x0, const Eigen::Ref<const Eigen::VectorXd>& commands,
+                         Eigen::Ref<Eigen::VectorXd> x0_dot) const {
+  x0_dot.head<3>() = x0.tail<3>();
+  x0_dot.tail<3>() = acceleration(x0, commands);
+}
+
+SampledRigidTrajectory::SampledRigidTrajectory(std::vector<Piece> pieces) : pieces_(std::move(pieces)) {
+  if (pieces_.empty()) throw std::invalid_argument("rigid trajectory: at least one piece is required");
+  for (std::size_t p = 0; p < pieces_.size(); ++p) {
+    const Piece& pc = pieces_[p];
+    if (pc.t.size() < 2 || pc.samples.size() != pc.t.size())
+      throw std::invalid_argument("rigid trajectory: piece " + std::to_string(p + 1) +
+                                  " needs at least two times and one sample per time");
+    for (std::size_t i = 1; i < pc.t.size(); ++i)
+      if (!(pc.t[i] > pc.t[i - 1]))
+        throw std::invalid_argument("rigid trajectory: times must be strictly ascending");
+    if (p > 0 && pc.t.front() != pieces_[p - 1].t.back())
+      throw std::invalid_argument("rigid trajectory: piece " + std::to_string(p + 1) +
+                                  " must start where the previous one ends");
+  }
+}
+
+std::vector<double> SampledRigidTrajectory::breakpoints() const {
+  std::vector<double> b;
+  for (std::size_t p = 1; p < pieces_.size(); ++p) b.push_back(pieces_[p].t.front());
+  return b;
+}
+
+RigidState SampledRigidTrajectory::at(const Instant& when) const {
+  std::size_t p = 0;
+  while (p + 1 < pieces_.size() && when.piece_mid >= pieces_[p + 1].t.front()) ++p;
+  const Piece& pc = pieces_[p];
+  const double t = when.t;
+  // interval [t_i, t_i+1] containing t (clamped: outside the span the end polynomial extends)
+  auto it = std::upper_bound(pc.t.begin(), pc.t.end(), t);
+  std::size_t i = (it == pc.t.begin()) ? 0 : static_cast<std::size_t>(it - pc.t.begin()) - 1;
+  i = std::min(i, pc.t.size() - 2);
+  const double h = pc.t[i + 1] - pc.t[i], s = (t - pc.t[i]) / h;
+  const RigidState& a = pc.samples[i];
+  const RigidState& b = pc.samples[i + 1];
+  // Quintic Hermite basis on s in [0, 1] and its first two derivatives in s.
+  const double s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
+  const double H[6] = {1 - 10 * s3 + 15 * s4 - 6 * s5, s - 6 * s3 + 8 * s4 - 3 * s5,
+                       0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5, 10 * s3 - 15 * s4 + 6 * s5,
+                       -4 * s3 + 7 * s4 - 3 * s5, 0.5 * s3 - s4 + 0.5 * s5};
+  const double D1[6] = {-30 * s2 + 60 * s3 - 30 * s4, 1 - 18 * s2 + 32 * s3 - 15 * s4,
+                        s - 4.5 * s2 + 6 * s3 - 2.5 * s4, 30 * s2 - 60 * s3 + 30 * s4,
+                        -12 * s2 + 28 * s3 - 15 * s4, 1.5 * s2 - 4 * s3 + 2.5 * s4};
+  const double D2[6] = {-60 * s + 180 * s2 - 120 * s3, -36 * s + 96 * s2 - 60 * s3,
+                        1 - 9 * s + 18 * s2 - 10 * s3, 60 * s - 180 * s2 + 120 * s3,
+                        -24 * s + 84 * s2 - 60 * s3, 3 * s - 12 * s2 + 10 * s3};
+  auto combine = [&](const double* w) {
+    return (w[0] * a.pos + w[1] * h * a.vel + w[2] * h * h * a.acc + w[3] * b.pos + w[4] * h * b.vel +
+            w[5] * h * h * b.acc)
+        .eval();
+  };
+  RigidState r;
+  r.pos = combine(H);
+  r.vel = combine(D1) / h;
+  r.acc = combine(D2) / (h * h);
+  return r;
+}
+
+}  // namespace freeflex

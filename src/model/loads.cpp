@@ -1,0 +1,51 @@
+#include "freeflex/model/loads.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace freeflex {
+
+TimeProfile::TimeProfile(Kind kind, std::vector<double> times, std::vector<double> values)
+    : kind_(kind), times_(std::move(times)), values_(std::move(values)) {
+  if (times_.size() < 2) throw std::invalid_argument("time profile: at least two times are required");
+  for (std::size_t i = 1; i < times_.size(); ++i)
+    if (!(times_[i] > times_[i - 1]))
+      throw std::invalid_argument("time profile: times must be strictly ascending (entry " + std::to_string(i + 1) +
+                                  ")");
+  const std::size_t expect = kind_ == Kind::Steps ? times_.size() - 1 : times_.size();
+  if (values_.size() != expect)
+    throw std::invalid_argument("time profile: expected " + std::to_string(expect) + " values, got " +
+                                std::to_string(values_.size()));
+}
+
+double TimeProfile::value(const Instant& at) const {
+  const double mid = at.piece_mid;
+  if (mid < times_.front() || mid > times_.back()) return 0.0;
+  std::size_t i = 0;
+  while (i + 2 < times_.size() && mid >= times_[i + 1]) ++i;
+  if (kind_ == Kind::Steps) return values_[i];
+  const double s = (at.t - times_[i]) / (times_[i + 1] - times_[i]);
+  return values_[i] + s * (values_[i + 1] - values_[i]);
+}
+
+void Excitation::evaluate(const Instant& at, Eigen::Ref<Eigen::VectorXd> commands) const {
+  for (std::size_t e = 0; e < profiles.size(); ++e)
+    commands(static_cast<Eigen::Index>(e)) = profiles[e] ? profiles[e]->value(at) : 0.0;
+}
+
+std::vector<double> Excitation::breakpoints() const {
+  std::vector<double> b;
+  for (const auto& p : profiles)
+    if (p) b.insert(b.end(), p->times().begin(), p->times().end());
+  return b;
+}
+
+double Excitation::end_time() const {
+  double t = 0.0;
+  for (const auto& p : profiles)
+    if (p) t = std::max(t, p->times().back());
+  return t;
+}
+
+}  // namespace freeflex

@@ -1,0 +1,167 @@
+// The three models against each other: the first-order model is the linearization of
+// the full model (central differences), the zero-order model is the full model at q = 0.
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "freeflex/dynamics/first_order.hpp"
+#include "freeflex/dynamics/full_model.hpp"
+
+using namespace freeflex;
+
+namespace {
+
+/// A beam that exercises every term: o off the mass centre (S_o != 0), a hub, a tip
+/// mass, two segments, an inertial force, a follower thruster, a body thruster, a torque.
+FlexibleBody rich_body(int noa, std::vector<double> damping = {}) {
+  BeamProperties p;
+  p.segments = {{0.6, 1.2, 2.0}, {0.5, 0.7, 1.1}};
+  p.reference_m = 0.45;
+  p.hub_mass_kg = 0.3;
+  p.hub_rotary_inertia_kgm2 = 0.02;
+  p.point_masses = {{1.1, 0.25}};
+  std::vector<ForceElement> el;
+  el.push_back({"force", ForceElement::Type::Force, 0.9, {0.3, -0.8}, false});
+  el.push_back({"follower", ForceElement::Type::Thruster, 1.1, {0.2, 1.0}, true});
+  el.push_back({"thruster", ForceElement::Type::Thruster, 0.1, {-0.5, 0.4}, false});
+  el.push_back({"torque", ForceElement::Type::Torque, 0.7, {0.0, 0.0}, false});
+  return FlexibleBody(Beam(p), noa, el, std::move(damping));
+}
+
+/// A fixed rigid state returned at every instant: the linearization point.
+class FixedTrajectory : public RigidTrajectory {
+ public:
+  explicit FixedTrajectory(RigidState s) : s_(s) {}
+  RigidState at(const Instant&) const override { return s_; }
+  double t_begin() const override { return 0.0; }
+  double t_end() const override { return 1.0; }
+  std::vector<double> breakpoints() const override { return {}; }
+
+ private:
+  RigidState s_;
+};
+
+double max_rel(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).cwiseAbs().maxCoeff() / std::max(1e-300, b.cwiseAbs().maxCoeff());
+}
+
+}  // namespace
+
+TEST_CASE("first-order A(t), B(t) match central differences of the full model", "[dynamics]") {
+  const FlexibleBody body = rich_body(6, {0.02, 0.01, 0.03});
+  REQUIRE(std::abs(body.integrals().S_o) > 0.05);
+  const FullModel full(body);
+  const int N = body.dofs(), ne = 4;
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int trial = 0; trial < 25; ++trial) {
+    RigidState s;
+    s.pos = Eigen::Vector3d(U(rng), U(rng), 3.0 * U(rng));
+    s.vel = Eigen::Vector3d(U(rng), U(rng), 4.0 * U(rng));
+    s.acc = Eigen::Vector3d(U(rng), U(rng), 5.0 * U(rng));
+    Eigen::VectorXd u0(ne);
+    for (int e = 0; e < ne; ++e) u0(e) = 2.0 * U(rng);
+    const FixedTrajectory traj(s);
+    const FirstOrderModel fo(body, traj, [&](const Instant&, Eigen::Ref<Eigen::VectorXd> u) { u = u0; }, {0, 1, 2, 3});
+    const Instant at = Instant::at(0.37 * trial);
+    Eigen::MatrixXd A, B;
+    Eigen::VectorXd g;
+    fo.state_space(at, A, B, g);
+
+    Eigen::VectorXd z = Eigen::VectorXd::Zero(N), zd = z, zdd = z;
+    z.head<3>() = s.pos;
+    zd.head<3>() = s.vel;
+    zdd.head<3>() = s.acc;
+    const double h = 1e-6;  // central differences: truncation ~h^2, round-off ~eps/h ~1e-10
+    Eigen::MatrixXd dz(N, N), dzd(N, N), dzdd(N, N), du(N, ne);
+    for (int j = 0; j < N; ++j) {
+      Eigen::VectorXd e = Eigen::VectorXd::Unit(N, j) * h;
+      dz.col(j) = (full.residual(z + e, zd, zdd, u0) - full.residual(z - e, zd, zdd, u0)) / (2 * h);
+      dzd.col(j) = (full.residual(z, zd + e, zdd, u0) - full.residual(z, zd - e, zdd, u0)) / (2 * h);
+      dzdd.col(j) = (full.residual(z, zd, zdd + e, u0) - full.residual(z, zd, zdd - e, u0)) / (2 * h);
+    }
+    for (int k = 0; k < ne; ++k) {
+      Eigen::VectorXd e = Eigen::VectorXd::Unit(ne, k) * h;
+      du.col(k) = -(full.residual(z, zd, zdd, u0 + e) - full.residual(z, zd, zdd, u0 - e)) / (2 * h);
+    }
+    const Eigen::LLT<Eigen::MatrixXd> llt(dzdd);
+    Eigen::MatrixXd A_fd = Eigen::MatrixXd::Zero(2 * N, 2 * N), B_fd = Eigen::MatrixXd::Zero(2 * N, ne);
+    A_fd.topRightCorner(N, N).setIdentity();
+    A_fd.bottomLeftCorner(N, N) = llt.solve(-dz);
+    A_fd.bottomRightCorner(N, N) = llt.solve(-dzd);
+    B_fd.bottomRows(N) = llt.solve(du);
+    FirstOrderModel::Implicit imp;
+    fo.implicit_form(at, imp);
+    const Eigen::VectorXd r0_direct = -full.residual(z, zd, zdd, u0);
+    INFO("trial " << trial << ": A rel err " << max_rel(A, A_fd) << ", B rel err " << max_rel(B, B_fd));
+    CHECK(max_rel(A, A_fd) < 1e-6);  // the bound; FD error is ~1e-9 here
+    CHECK(max_rel(B, B_fd) < 1e-6);
+    CHECK(max_rel(imp.r0, r0_direct) < 1e-12);  // same quantity, two code paths: round-off only
+    CHECK(max_rel(imp.M0, dzdd) < 1e-8);         // residual is linear in z'': FD exact up to eps/h
+  }
+}
+
+TEST_CASE("element forces: derivatives against central differences away from q = 0", "[dynamics]") {
+  const FlexibleBody body = rich_body(8);
+  const int N = body.dofs(), n = body.n();
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int trial = 0; trial < 10; ++trial) {
+    const double th = 3.0 * U(rng);
+    Eigen::VectorXd q(n);
+    for (int i = 0; i < n; ++i) q(i) = 0.05 * U(rng);
+    for (int e = 0; e < 4; ++e) {
+      Eigen::VectorXd g(N), gp(N), gm(N);
+      Eigen::MatrixXd d;
+      body.element_force(e, th, q, g, &d);
+      Eigen::MatrixXd d_fd(N, 1 + n);
+      const double h = 1e-6;  // central differences of smooth trigonometric terms
+      body.element_force(e, th + h, q, gp);
+      body.element_force(e, th - h, q, gm);
+      d_fd.col(0) = (gp - gm) / (2 * h);
+      for (int j = 0; j < n; ++j) {
+        const Eigen::VectorXd dq = Eigen::VectorXd::Unit(n, j) * h;
+        body.element_force(e, th, q + dq, gp);
+        body.element_force(e, th, q - dq, gm);
+        d_fd.col(1 + j) = (gp - gm) / (2 * h);
+      }
+      INFO("element " << e << " trial " << trial);
+      CHECK((d - d_fd).cwiseAbs().maxCoeff() < 1e-7 * std::max(1.0, d.cwiseAbs().maxCoeff()));
+    }
+  }
+}
+
+TEST_CASE("zero-order model is the full model's rigid rows at q = 0", "[dynamics]") {
+  const FlexibleBody body = rich_body(4);
+  const FullModel full(body);
+  const ZeroOrderModel zero(body);
+  const int N = body.dofs();
+  Eigen::VectorXd x0(6);
+  x0 << 0.2, -0.4, 1.1, 0.3, 0.5, -2.0;
+  Eigen::VectorXd u(4);
+  u << 0.7, -1.2, 0.4, 0.9;
+  const Eigen::Vector3d acc = zero.acceleration(x0, u);
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(N), zd = z, zdd = z;
+  z.head<3>() = x0.head<3>();
+  zd.head<3>() = x0.tail<3>();
+  zdd.head<3>() = acc;
+  // rigid rows of the full residual vanish to round-off of O(1) terms
+  CHECK(full.residual(z, zd, zdd, u).head<3>().cwiseAbs().maxCoeff() < 1e-13);
+}
+
+TEST_CASE("full model: rhs solves the residual; damping leaves rigid motion alone", "[dynamics]") {
+  const FlexibleBody body = rich_body(6, {0.05, 0.05});
+  const FullModel full(body);
+  auto data = full.create_data();
+  const int N = body.dofs();
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(2 * N, -0.3, 0.4), xd(2 * N), u(4);
+  u << 0.5, 0.1, -0.3, 0.2;
+  REQUIRE(full.rhs(data, x, u, xd));
+  const double res = full.residual(x.head(N), x.tail(N), xd.tail(N), u).cwiseAbs().maxCoeff();
+  const double scale = (body.integrals().K * x.segment(3, body.n())).cwiseAbs().maxCoeff();
+  INFO("residual " << res << " against stiffness forces of " << scale);
+  CHECK(res < 1e-13 * scale);  // a linear solve with condition number ~1e2: round-off of the largest term
+  Eigen::VectorXd rigid = Eigen::VectorXd::Zero(N);
+  rigid.head<3>() << 0.7, -0.2, 1.3;  // any rigid velocity
+  CHECK((body.damping() * rigid).cwiseAbs().maxCoeff() < 1e-12);  // round-off of 𝕄0 V products
+}
