@@ -7,6 +7,8 @@
 //   build-bench/bench/bench_simulation
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
+
 #include "freeflex/sim/simulate.hpp"
 
 using namespace freeflex;
@@ -28,6 +30,7 @@ Case moment_case(int noa, IntegratorOptions::Method method) {
   c.opt.integrator.rtol = 1e-8;
   c.opt.integrator.atol = 1e-10;
   c.opt.integrator.method = method;
+  if (const char* mo = std::getenv("FREEFLEX_MAX_ORDER")) c.opt.integrator.max_order = std::atoi(mo);
   return c;
 }
 

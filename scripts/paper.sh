@@ -7,7 +7,7 @@ bash "$root/scripts/install_deps.sh"
 cmake -S "$root" -B "$root/build" -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF > /dev/null
 cmake --build "$root/build" -j "$(nproc)" --target freeflex_cli
 results=${FREEFLEX_RESULTS:-$root/results}
-for design in paper_table1; do
+for design in paper_table1 paper_force_pulse paper_moment_pulse; do
   echo "== freeflex run designs/$design.toml"
   "$root/build/freeflex" run "$root/designs/$design.toml" --out "$results/$design"
 done

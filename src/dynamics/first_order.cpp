@@ -22,6 +22,9 @@ FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory
     if (i < 0 || i >= ne)
       throw std::invalid_argument("first-order model: input index " + std::to_string(i) + " is not an element (0.." +
                                   std::to_string(ne - 1) + ")");
+  Eigen::MatrixXd M0(body_.dofs(), body_.dofs());
+  body_.mass_matrix(0.0, Eigen::VectorXd::Zero(body_.n()), M0);
+  rest_llt_.compute(M0);
 }
 
 void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
@@ -94,13 +97,42 @@ void FirstOrderModel::state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::
 
 void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
                           const Eigen::Ref<const Eigen::VectorXd>& u1, Eigen::Ref<Eigen::VectorXd> x1_dot) const {
-  const int N = body_.dofs();
-  Implicit o;
-  implicit_form(at, o);
+  const ModalIntegrals& mi = body_.integrals();
+  const int n = body_.n(), N = body_.dofs();
+  const RigidState r = nominal_.at(at);
+  const double th = r.pos(2), thd = r.vel(2), thdd = r.acc(2);
+  const Eigen::Vector2d Rdd = r.acc.head<2>();
+  const Eigen::Matrix2d C = rot(th);
+  const Eigen::Vector2d Ce1 = C.col(0), Ce2 = C.col(1), CJe2 = -Ce1;
+  const Eigen::Vector2d Cs0 = mi.S_o * Ce1, CJs0 = mi.S_o * Ce2;  // C s0, C J s0
+  const double th1 = x1(2), th1d = x1(N + 2);
+  const Eigen::VectorXd q = x1.segment(3, n);
+  const auto qd = x1.tail(n);
+  const double Pq = mi.Phi_bar.dot(q), Pqd = mi.Phi_bar.dot(qd);
+
+  // Loads at (θ0, 0) and their change along (θ1, q): G and dG·[θ1; q].
+  Eigen::VectorXd u0(body_.elements().size()), f = Eigen::VectorXd::Zero(N), dG = Eigen::VectorXd::Zero(N);
+  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
+  commands_(at, u0);
+  for (int e = 0; e < u0.size(); ++e)
+    if (u0(e) != 0.0) body_.add_element_force(e, th, q0, u0(e), f, th1, &q, &dG);
+  for (int k = 0; k < input_size(); ++k)
+    if (u1(k) != 0.0) body_.add_element_force(inputs_[k], th, q0, u1(k), f);
+  f += dG;
+  // r0 - Kr δz - Cr δz' (eq. 7.1), row block by row block
+  f.head<2>() += thd * thd * Cs0 - (mi.m * Rdd + thdd * CJs0)                     // r0
+                 + (thdd * Cs0 + thd * thd * CJs0) * th1 - (thdd * CJe2 - thd * thd * Ce2) * Pq
+                 + 2.0 * thd * Cs0 * th1d - 2.0 * thd * CJe2 * Pqd;
+  f(2) += -(CJs0.dot(Rdd) + mi.I_o * thdd) + Rdd.dot(Cs0) * th1 - Rdd.dot(CJe2) * Pq;
+  f.tail(n) += -(mi.Phi_bar.transpose() * Ce2.dot(Rdd) + mi.Phi_tilde.transpose() * thdd) +
+               mi.Phi_bar.transpose() * (Ce1.dot(Rdd) * th1) - mi.K * q + (thd * thd) * (mi.M * q);
+  if (body_.damped()) f.noalias() -= body_.damping() * x1.tail(N);
+  // 𝕄0(θ0)⁻¹ f = T 𝕄0(0)⁻¹ Tᵀ f
+  f.head<2>() = C.transpose() * f.head<2>();
+  rest_llt_.solveInPlace(f);
   x1_dot.head(N) = x1.tail(N);
-  Eigen::VectorXd f = o.Kt * x1.head(N) + o.Ct * x1.tail(N) + o.r0;
-  if (u1.size() > 0) f.noalias() += o.Gu * u1;
-  x1_dot.tail(N) = o.M0.llt().solve(f);
+  x1_dot.tail(N) = f;
+  x1_dot.segment(N, 2) = C * f.head<2>();
 }
 
 }  // namespace freeflex

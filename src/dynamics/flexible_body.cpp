@@ -74,7 +74,9 @@ void FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const Eigen::Vecto
   out.block<1, 2>(2, 0) = MRth.transpose();
   out.block(0, 3, 2, n) = Ce2 * mi_.Phi_bar;
   out.block(3, 0, n, 2) = (Ce2 * mi_.Phi_bar).transpose();
-  out(2, 2) = mi_.I_o + q.dot(mi_.M * q);
+  double qMq = 0.0;  // qᵀ M q without a temporary: this runs in every right-hand side
+  for (int i = 0; i < n; ++i) qMq += q(i) * mi_.M.col(i).dot(q);
+  out(2, 2) = mi_.I_o + qMq;
   out.block(2, 3, 1, n) = mi_.Phi_tilde;
   out.block(3, 2, n, 1) = mi_.Phi_tilde.transpose();
   out.bottomRightCorner(n, n) = mi_.M;
@@ -129,15 +131,57 @@ void FlexibleBody::generalized_force(double theta, const Eigen::Ref<const Eigen:
                                      Eigen::MatrixXd* d) const {
   const int N = dofs();
   G.setZero();
-  if (d) d->setZero(N, 1 + n());
+  if (!d) {
+    for (int e = 0; e < static_cast<int>(elements_.size()); ++e)
+      if (commands(e) != 0.0) add_element_force(e, theta, q, commands(e), G);
+    return;
+  }
+  d->setZero(N, 1 + n());
   Eigen::VectorXd g(N);
   Eigen::MatrixXd dg;
   for (int e = 0; e < static_cast<int>(elements_.size()); ++e) {
     if (commands(e) == 0.0) continue;
-    element_force(e, theta, q, g, d ? &dg : nullptr);
+    element_force(e, theta, q, g, &dg);
     G += commands(e) * g;
-    if (d) *d += commands(e) * dg;
+    *d += commands(e) * dg;
   }
+}
+
+void FlexibleBody::add_element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q, double scale,
+                                     Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q,
+                                     Eigen::VectorXd* dG) const {
+  const int n = this->n();
+  const ForceElement& el = elements_[e];
+  const Eigen::RowVectorXd& phi = phi_[e];
+  const Eigen::RowVectorXd& dphi = dphi_[e];
+  if (el.type == ForceElement::Type::Torque) {  // eq. 6.4c: no dependence on configuration
+    G(2) += scale;
+    G.tail(n).noalias() += scale * dphi.transpose();
+    return;
+  }
+  // Same steps as element_force, along one direction (d_theta, d_q) instead of a Jacobian.
+  Eigen::Vector2d f, df = Eigen::Vector2d::Zero();
+  if (el.type == ForceElement::Type::Force) {
+    f = el.direction;
+  } else {
+    const double psi = theta + (el.follow_slope ? dphi.dot(q) : 0.0);
+    const Eigen::Matrix2d Cp = rot(psi);
+    f = Cp * el.direction;
+    const double d_psi = d_theta + (el.follow_slope && d_q ? dphi.dot(*d_q) : 0.0);
+    df = d_psi * (Cp * kJ * el.direction);
+  }
+  const Eigen::Matrix2d C = rot(theta);
+  const double xa = x_[e], ua = phi.dot(q);
+  const Eigen::Vector2d w = C.transpose() * f;
+  G.head<2>() += scale * f;
+  G(2) += scale * (-w(0) * ua + w(1) * xa);
+  G.tail(n).noalias() += (scale * w(1)) * phi.transpose();
+  if (!dG) return;
+  const Eigen::Vector2d dw = d_theta * (kJ.transpose() * w) + C.transpose() * df;
+  const double dua = d_q ? phi.dot(*d_q) : 0.0;
+  dG->head<2>() += scale * df;
+  (*dG)(2) += scale * (-dw(0) * ua - w(0) * dua + dw(1) * xa);
+  dG->tail(n).noalias() += (scale * dw(1)) * phi.transpose();
 }
 
 double FlexibleBody::vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& q,

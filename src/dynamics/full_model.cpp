@@ -18,12 +18,13 @@ FullModel::Data FullModel::create_data() const {
   d.Mz.resize(N, N);
   d.G.resize(N);
   d.b.resize(N);
+  d.Mq.resize(body_.n());
   d.llt = Eigen::LLT<Eigen::MatrixXd>(N);
   return d;
 }
 
 void FullModel::bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zd,
-                     Eigen::Ref<Eigen::VectorXd> out) const {
+                     Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const {
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n();
   const double th = z(2), thd = zd(2);
@@ -32,7 +33,7 @@ void FullModel::bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Re
   const Eigen::Matrix2d C = rot(th);
   const Eigen::Vector2d s(mi.S_o, mi.Phi_bar.dot(q));
   const double Pqd = mi.Phi_bar.dot(qd);
-  const Eigen::VectorXd Mq = mi.M * q;
+  Mq.noalias() = mi.M * q;
   // eq. 6.2: R row -θ'² C s + 2θ' C J e2 Φ̄ q'; θ row 2θ' qᵀ M q'; q row -θ'² M q + K q
   out.head<2>() = -thd * thd * (C * s) + 2.0 * thd * Pqd * (C * kJ).col(1);
   out(2) = 2.0 * thd * Mq.dot(qd);
@@ -47,8 +48,8 @@ Eigen::VectorXd FullModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
   const int N = body_.dofs(), n = body_.n();
   Eigen::MatrixXd Mz(N, N);
   body_.mass_matrix(z(2), z.tail(n), Mz);
-  Eigen::VectorXd h(N), G(N);
-  bias(z, zd, h);
+  Eigen::VectorXd h(N), G(N), Mq(n);
+  bias(z, zd, h, Mq);
   body_.generalized_force(z(2), z.tail(n), commands, G);
   return Mz * zdd + h - G;
 }
@@ -59,12 +60,14 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   const auto z = x.head(N);
   const auto zd = x.tail(N);
   body_.mass_matrix(z(2), z.tail(n), d.Mz);
-  bias(z, zd, d.b);
+  bias(z, zd, d.b, d.Mq);
   body_.generalized_force(z(2), z.tail(n), commands, d.G);
   d.llt.compute(d.Mz);
   if (d.llt.info() != Eigen::Success) return false;
   x_dot.head(N) = zd;
-  x_dot.tail(N) = d.llt.solve(d.G - d.b);
+  d.G -= d.b;
+  d.llt.solveInPlace(d.G);
+  x_dot.tail(N) = d.G;
   return true;
 }
 

@@ -235,7 +235,7 @@ void read_simulation(Section& root, Design& d) {
   o.integrator.rtol = s.number("rtol", Range{0.0, 1.0, true, true}, false).value_or(1e-8);
   o.integrator.atol = s.number("atol", Range::positive(), false).value_or(1e-10);
   o.integrator.max_step = s.number("max_step_s", Range::nonnegative(), false).value_or(0.0);
-  const std::string method = s.choice("method", {"bdf", "adams"}, false).value_or("bdf");
+  const std::string method = s.choice("method", {"bdf", "adams"}, false).value_or("adams");
   o.integrator.method = method == "adams" ? IntegratorOptions::Method::Adams : IntegratorOptions::Method::Bdf;
   st.nonlinear = s.boolean("nonlinear", false).value_or(true);
   st.perturbation = s.boolean("perturbation", false).value_or(true);

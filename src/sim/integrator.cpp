@@ -311,6 +311,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   check_setup(CVodeSetUserData(cv.mem, &data), "CVodeSetUserData", data);
   check_setup(CVodeSetMaxNumSteps(cv.mem, options.max_steps), "CVodeSetMaxNumSteps", data);
   if (options.max_step > 0.0) check_setup(CVodeSetMaxStep(cv.mem, options.max_step), "CVodeSetMaxStep", data);
+  if (options.max_order > 0) check_setup(CVodeSetMaxOrd(cv.mem, options.max_order), "CVodeSetMaxOrd", data);
   if (bdf) {
     cv.A = check_alloc(SUNDenseMatrix(static_cast<sunindextype>(n), static_cast<sunindextype>(n), cv.ctx),
                        "SUNDenseMatrix");

@@ -88,3 +88,33 @@ TEST_CASE("run on the paper's Table 1 design writes table1.csv, fig3 and summary
   CHECK_THAT(summary, Contains("\"status\": \"ok\""));
   CHECK_THAT(summary, Contains("\"max_abs_difference\""));
 }
+
+TEST_CASE("run on the paper's force pulse writes both responses and their differences", "[cli][paper]") {
+  const std::string out = temp_path("force");
+  const CliResult r =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_force_pulse.toml --out " + out + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  for (const char* f : {"/nonlinear.csv", "/perturbation.csv"})
+    CHECK(read(out + f).rfind("t,Rx,Ry,theta,q1,q2,q3,q4,q5,q6,", 0) == 0);
+  const std::string summary = read(out + "/summary.json");
+  for (const char* key : {"\"max_abs_dq\"", "\"max_rigid_difference\"", "\"residual_vibration_energy_J\"",
+                          "\"energy_drift_rel\"", "\"linear_momentum_drift_rel\"", "\"angular_momentum_drift_rel\""})
+    CHECK_THAT(summary, Contains(key));
+}
+
+TEST_CASE("a bad simulation design exits 2 naming the key and line", "[cli]") {
+  const std::string design = write_temp("badsim",
+                                        "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n"
+                                        "[[load]]\nname = \"F\"\ntype = \"torque\"\nposition_m = 2.0\n"
+                                        "[load.profile]\ntype = \"linear\"\ntimes_s = [0.0, 1.0, 0.5]\n"
+                                        "values = [0.0, 1.0, 0.0]\n[simulation]\nduration_s = 1.0\natol = -1\n");
+  const std::string out = temp_path("out");
+  const CliResult r = run_cli("run " + design + " --out " + out);
+  INFO(r.output);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Contains("line 8: load[1].position_m = 2.0, must be in [0, 1]"));
+  CHECK_THAT(r.output, Contains("line 11: load[1].profile.times_s must be strictly increasing"));
+  CHECK_THAT(r.output, Contains("line 15: simulation.atol = -1, must be > 0"));
+  CHECK(!exists(out));
+}

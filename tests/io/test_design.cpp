@@ -89,3 +89,51 @@ TEST_CASE("syntax errors and missing files", "[io]") {
                     Contains("design '/nonexistent/x.toml': cannot open the file"));
   CHECK_THAT(problems_of("title = \"no beam\"\n"), Contains("section [beam] is required"));
 }
+
+namespace {
+const std::string kPaperBeam = "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n";  // lines 1-4
+const std::string kLoad =  // lines 5-13
+    "[[load]]\nname = \"F\"\ntype = \"force\"\nposition_m = 0.5\ndirection = [0.0, 1.0]\n"
+    "[load.profile]\ntype = \"steps\"\ntimes_s = [0.0, 0.5, 1.0]\nvalues = [1.0, -1.0]\n";
+}  // namespace
+
+TEST_CASE("loads, actuators and simulation keys load", "[io]") {
+  const Design d = parse_design(kPaperBeam + kLoad +
+                                    "[[actuator]]\nname = \"tip\"\ntype = \"thruster\"\nposition_m = 1.0\n"
+                                    "direction = [0, 1]\nfollow_slope = true\nlimit = 2.0\n"
+                                    "[damping]\nratios = [0.01, 0.02]\n[simulation]\nduration_s = 2.0\nrtol = 1e-9\n",
+                                "t.toml");
+  REQUIRE(d.loads.size() == 1);
+  CHECK(d.loads[0].profile.value(0.7) == -1.0);
+  REQUIRE(d.actuators.size() == 1);
+  CHECK(d.actuators[0].element.follow_slope);
+  CHECK(d.actuators[0].limit == 2.0);
+  CHECK(d.damping_ratios == std::vector<double>{0.01, 0.02});
+  REQUIRE(d.simulation);
+  CHECK(d.simulation->options.integrator.rtol == 1e-9);
+  CHECK(d.simulation->options.output_step_s == Approx(2.0 / 600));
+  CHECK(d.force_elements().size() == 2);
+}
+
+TEST_CASE("bad loads and tolerances name key and line", "[io]") {
+  std::string off_beam = kLoad;
+  off_beam.replace(off_beam.find("position_m = 0.5"), 16, "position_m = 1.5");
+  CHECK_THAT(problems_of(kPaperBeam + off_beam), Contains("line 8: load[1].position_m = 1.5, must be in [0, 1]"));
+  std::string decreasing = kLoad;
+  decreasing.replace(decreasing.find("[0.0, 0.5, 1.0]"), 15, "[0.0, 0.7, 0.5]");
+  CHECK_THAT(problems_of(kPaperBeam + decreasing),
+             Contains("line 12: load[1].profile.times_s must be strictly increasing: entry 3 (0.5) does not exceed "
+                      "entry 2 (0.7)"));
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\nrtol = -1e-8\n"),
+             Contains("line 16: simulation.rtol = -1e-08, must be in (0, 1)"));
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\natol = -1e-10\n"),
+             Contains("line 16: simulation.atol = -1e-10, must be > 0"));
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 0\n"),
+             Contains("line 15: simulation.duration_s = 0, must be > 0"));
+  std::string wrong_count = kLoad;
+  wrong_count.replace(wrong_count.find("values = [1.0, -1.0]"), 20, "values = [1.0]");
+  CHECK_THAT(problems_of(kPaperBeam + wrong_count),
+             Contains("load[1].profile.values has 1 entries, must have 2 (one per interval between times_s)"));
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + kLoad), Contains("load[2].name = \"F\" is used twice"));
+  CHECK_THAT(problems_of(kPaperBeam + "[simulation]\nduration_s = 1.0\n"), Contains("needs at least one [[load]]"));
+}

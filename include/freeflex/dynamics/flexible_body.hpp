@@ -42,6 +42,13 @@ class FlexibleBody {
                          const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G,
                          Eigen::MatrixXd* d = nullptr) const;
 
+  /// Adds scale times the generalized force of element e at (theta, q) to G and, if dG is
+  /// given, scale times its derivative along (d_theta, d_q) to dG (d_q null: zero).
+  /// The allocation-free path of the simulators; element_force is the reference.
+  void add_element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q, double scale,
+                         Eigen::Ref<Eigen::VectorXd> G, double d_theta = 0.0, const Eigen::VectorXd* d_q = nullptr,
+                         Eigen::VectorXd* dG = nullptr) const;
+
   /// Modal damping D (eq. 6.5), (3+n) x (3+n); zero when no ratio is set.
   const Eigen::MatrixXd& damping() const { return D_; }
   bool damped() const { return damped_; }

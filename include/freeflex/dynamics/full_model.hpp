@@ -12,7 +12,7 @@ class FullModel {
   /// Scratch space for one thread of evaluation (make one with create_data()).
   struct Data {
     Eigen::MatrixXd Mz;
-    Eigen::VectorXd G, b;
+    Eigen::VectorXd G, b, Mq;
     Eigen::LLT<Eigen::MatrixXd> llt;
   };
 
@@ -39,8 +39,9 @@ class FullModel {
 
  private:
   /// h(z, z') + [0; 0; K q] + D z': everything in eq. 6.2 but inertia and loads.
+  /// `Mq` is scratch of size n (receives M q).
   void bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
-            Eigen::Ref<Eigen::VectorXd> out) const;
+            Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
   const FlexibleBody& body_;
 };
 

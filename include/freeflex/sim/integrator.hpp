@@ -27,9 +27,12 @@ struct OdeSystem {
 struct IntegratorOptions {
   double rtol = 1e-8;   ///< relative tolerance, > 0
   double atol = 1e-10;  ///< absolute tolerance, > 0 (same for every component)
-  enum class Method { Bdf, Adams } method = Method::Bdf;
+  /// Adams suits the lightly damped oscillations here (fewer steps, no numerical damping
+  /// of energy); BDF suits stiff cases (many functions, heavy damping).
+  enum class Method { Bdf, Adams } method = Method::Adams;
   double max_step = 0.0;       ///< 0: no limit [s]
   long max_steps = 1000000;    ///< per piece; exceeding it is a failure
+  int max_order = 0;           ///< 0: CVODE's default (BDF 5, Adams 12)
 };
 
 struct IntegrationResult {
