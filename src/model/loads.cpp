@@ -32,17 +32,18 @@ double TimeProfile::value(const Instant& at) const {
 void Excitation::evaluate(const Instant& at, Eigen::Ref<Eigen::VectorXd> commands) const {
   for (std::size_t e = 0; e < profiles.size(); ++e)
     commands(static_cast<Eigen::Index>(e)) = profiles[e] ? profiles[e]->value(at) : 0.0;
+  if (add_commands) add_commands(at, commands);
 }
 
 std::vector<double> Excitation::breakpoints() const {
-  std::vector<double> b;
+  std::vector<double> b = add_breakpoints;
   for (const auto& p : profiles)
     if (p) b.insert(b.end(), p->times().begin(), p->times().end());
   return b;
 }
 
 double Excitation::end_time() const {
-  double t = 0.0;
+  double t = add_commands ? add_end_time : 0.0;
   for (const auto& p : profiles)
     if (p) t = std::max(t, p->times().back());
   return t;

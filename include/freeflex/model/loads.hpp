@@ -3,6 +3,7 @@
 // thrusters fixed to the body (optionally following the local slope), point torques.
 // Each is a "force element" whose scalar command (N or N m) scales a direction; a load
 // takes its command from a time profile, an actuator from a controller.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -53,6 +54,11 @@ struct ForceElement {
 /// has one (a load) and is zero otherwise (an actuator without a controller).
 struct Excitation {
   std::vector<std::optional<TimeProfile>> profiles;
+  /// Optional commands added on top of the profiles (e.g. an optimized maneuver driving
+  /// the actuators), with the times where they may jump or kink and when they end.
+  std::function<void(const Instant&, Eigen::Ref<Eigen::VectorXd>)> add_commands;
+  std::vector<double> add_breakpoints;
+  double add_end_time = 0.0;
   /// commands(e) for every element; `commands` must have profiles.size() entries.
   void evaluate(const Instant& at, Eigen::Ref<Eigen::VectorXd> commands) const;
   /// Every profile time: where some command may jump or kink.

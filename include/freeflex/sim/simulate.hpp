@@ -44,7 +44,7 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
 struct PerturbationResult {
   SimulationResult total;       ///< R0 + R1, θ0 + θ1, q (and rates)
   SimulationResult zero_order;  ///< the rigid motion alone (q columns zero)
-  std::shared_ptr<SampledRigidTrajectory> nominal;  ///< what the first-order model used
+  std::shared_ptr<const RigidTrajectory> nominal;  ///< what the first-order model used
   long first_order_rhs_evaluations = 0;
 };
 
@@ -52,5 +52,11 @@ struct PerturbationResult {
 /// with u1 = 0 (eq. 7.3). The excitation is the nominal (zero-order) loading.
 PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitation& excitation,
                                          const SimulationOptions& options);
+
+/// The first-order simulation about a given rigid trajectory (from the optimizer, say),
+/// with u1 = 0; totals add the trajectory. The excitation gives the nominal commands.
+PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const Excitation& excitation,
+                                               std::shared_ptr<const RigidTrajectory> nominal,
+                                               const SimulationOptions& options);
 
 }  // namespace freeflex
