@@ -4,14 +4,37 @@
 #include <stdexcept>
 #include <string>
 
+#include "planar.hpp"
+
 namespace freeflex {
 namespace {
-Eigen::Matrix2d rot(double a) {
+using planar::rot;
+
+/// The nominal motion at one instant and the rotated vectors eq. 7.1 needs.
+struct Frame {
+  double th, thd, thdd;
+  Eigen::Vector2d Rdd;
   Eigen::Matrix2d C;
-  C << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
-  return C;
+  Eigen::Vector2d Ce1, Ce2, CJe2, Cs0, CJs0;  // C e1, C e2, C J e2 = -C e1, C s0, C J s0
+  Eigen::Vector3d acc;
+};
+
+Frame frame_at(const RigidTrajectory& nominal, const Instant& at, double S_o) {
+  const RigidState r = nominal.at(at);
+  Frame f;
+  f.th = r.pos(2);
+  f.thd = r.vel(2);
+  f.thdd = r.acc(2);
+  f.Rdd = r.acc.head<2>();
+  f.acc = r.acc;
+  f.C = rot(f.th);
+  f.Ce1 = f.C.col(0);
+  f.Ce2 = f.C.col(1);
+  f.CJe2 = -f.Ce1;
+  f.Cs0 = S_o * f.Ce1;
+  f.CJs0 = S_o * f.Ce2;
+  return f;
 }
-const Eigen::Matrix2d kJ = (Eigen::Matrix2d() << 0.0, -1.0, 1.0, 0.0).finished();
 }  // namespace
 
 FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory& nominal,
@@ -30,12 +53,9 @@ FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory
 void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n(), N = body_.dofs();
-  const RigidState r = nominal_.at(at);
-  const double th = r.pos(2), thd = r.vel(2), thdd = r.acc(2);
-  const Eigen::Vector2d Rdd = r.acc.head<2>();
-  const Eigen::Matrix2d C = rot(th);
-  const Eigen::Vector2d s0(mi.S_o, 0.0);
-  const Eigen::Vector2d Ce1 = C.col(0), Ce2 = C.col(1), CJe2 = -Ce1;  // J e2 = -e1
+  const Frame fr = frame_at(nominal_, at, mi.S_o);
+  const double th = fr.th, thd = fr.thd, thdd = fr.thdd;
+  const Eigen::Vector2d& Rdd = fr.Rdd;
   const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
 
   Eigen::VectorXd u0(body_.elements().size());
@@ -49,18 +69,18 @@ void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
 
   // ∂(residual)/∂z at the nominal motion (eq. 7.1); columns Rx, Ry do not appear.
   Eigen::MatrixXd Kr = Eigen::MatrixXd::Zero(N, N);
-  Kr.block<2, 1>(0, 2) = -thdd * (C * s0) - thd * thd * (C * kJ * s0);
-  Kr(2, 2) = -Rdd.dot(C * s0);
-  Kr.block(3, 2, n, 1) = -mi.Phi_bar.transpose() * Ce1.dot(Rdd);
-  Kr.block(0, 3, 2, n) = (thdd * CJe2 - thd * thd * Ce2) * mi.Phi_bar;
-  Kr.block(2, 3, 1, n) = Rdd.dot(CJe2) * mi.Phi_bar;
+  Kr.block<2, 1>(0, 2) = -thdd * fr.Cs0 - thd * thd * fr.CJs0;
+  Kr(2, 2) = -Rdd.dot(fr.Cs0);
+  Kr.block(3, 2, n, 1) = -mi.Phi_bar.transpose() * fr.Ce1.dot(Rdd);
+  Kr.block(0, 3, 2, n) = (thdd * fr.CJe2 - thd * thd * fr.Ce2) * mi.Phi_bar;
+  Kr.block(2, 3, 1, n) = Rdd.dot(fr.CJe2) * mi.Phi_bar;
   Kr.bottomRightCorner(n, n) = mi.K - thd * thd * mi.M;
   Kr.middleCols(2, 1 + n) -= dG;  // configuration-dependent loads
 
   // ∂(residual)/∂z'
   Eigen::MatrixXd Cr = Eigen::MatrixXd::Zero(N, N);
-  Cr.block<2, 1>(0, 2) = -2.0 * thd * (C * s0);
-  Cr.block(0, 3, 2, n) = 2.0 * thd * CJe2 * mi.Phi_bar;
+  Cr.block<2, 1>(0, 2) = -2.0 * thd * fr.Cs0;
+  Cr.block(0, 3, 2, n) = 2.0 * thd * fr.CJe2 * mi.Phi_bar;
   if (body_.damped()) Cr += body_.damping();
 
   o.Kt = -Kr;
@@ -74,9 +94,9 @@ void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
   // r0 = G - 𝕄0 z0'' - h(z0, z0'): its q rows are the forcing of the vibration; its rigid
   // rows vanish when the trajectory satisfies eq. 6.3 exactly.
   Eigen::VectorXd zdd0 = Eigen::VectorXd::Zero(N);
-  zdd0.head<3>() = r.acc;
+  zdd0.head<3>() = fr.acc;
   o.r0 = G - o.M0 * zdd0;
-  o.r0.head<2>() += thd * thd * (C * s0);
+  o.r0.head<2>() += thd * thd * fr.Cs0;
 }
 
 void FirstOrderModel::state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
@@ -99,12 +119,11 @@ void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::Vecto
                           const Eigen::Ref<const Eigen::VectorXd>& u1, Eigen::Ref<Eigen::VectorXd> x1_dot) const {
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n(), N = body_.dofs();
-  const RigidState r = nominal_.at(at);
-  const double th = r.pos(2), thd = r.vel(2), thdd = r.acc(2);
-  const Eigen::Vector2d Rdd = r.acc.head<2>();
-  const Eigen::Matrix2d C = rot(th);
-  const Eigen::Vector2d Ce1 = C.col(0), Ce2 = C.col(1), CJe2 = -Ce1;
-  const Eigen::Vector2d Cs0 = mi.S_o * Ce1, CJs0 = mi.S_o * Ce2;  // C s0, C J s0
+  const Frame fr = frame_at(nominal_, at, mi.S_o);
+  const double th = fr.th, thd = fr.thd, thdd = fr.thdd;
+  const Eigen::Vector2d& Rdd = fr.Rdd;
+  const Eigen::Matrix2d& C = fr.C;
+  const Eigen::Vector2d &Ce1 = fr.Ce1, &Ce2 = fr.Ce2, &CJe2 = fr.CJe2, &Cs0 = fr.Cs0, &CJs0 = fr.CJs0;
   const double th1 = x1(2), th1d = x1(N + 2);
   const Eigen::VectorXd q = x1.segment(3, n);
   const auto qd = x1.tail(n);

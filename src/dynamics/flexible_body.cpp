@@ -4,15 +4,27 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "planar.hpp"
+
 namespace freeflex {
 namespace {
 
-Eigen::Matrix2d rot(double a) {
-  Eigen::Matrix2d C;
-  C << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
-  return C;
+using planar::rot;
+const Eigen::Matrix2d& kJ = planar::J();
+
+/// Inertial force per unit command (eq. 6.4a, 6.4b) and its derivative with respect to
+/// the angle psi = θ (+ Φ'(x_a) q when following the slope) that turns it; a force with
+/// inertial components does not turn (derivative zero).
+void applied_force(const ForceElement& el, double psi, Eigen::Vector2d& f, Eigen::Vector2d& df_dpsi) {
+  if (el.type == ForceElement::Type::Force) {
+    f = el.direction;
+    df_dpsi.setZero();
+    return;
+  }
+  const Eigen::Matrix2d Cp = rot(psi);
+  f = Cp * el.direction;
+  df_dpsi = Cp * kJ * el.direction;
 }
-const Eigen::Matrix2d kJ = (Eigen::Matrix2d() << 0.0, -1.0, 1.0, 0.0).finished();
 
 }  // namespace
 
@@ -97,17 +109,10 @@ void FlexibleBody::element_force(int e, double theta, const Eigen::Ref<const Eig
     return;
   }
   // Inertial force f(theta, q) and its derivatives (eq. 6.4a, 6.4b).
-  Eigen::Vector2d f, df_dth = Eigen::Vector2d::Zero();
-  Eigen::MatrixXd df_dq = Eigen::MatrixXd::Zero(2, n);
-  if (el.type == ForceElement::Type::Force) {
-    f = el.direction;
-  } else {
-    const double psi = theta + (el.follow_slope ? dphi.dot(q) : 0.0);
-    const Eigen::Matrix2d Cp = rot(psi);
-    f = Cp * el.direction;
-    df_dth = Cp * kJ * el.direction;
-    if (el.follow_slope) df_dq = df_dth * dphi;
-  }
+  const bool follows = el.type == ForceElement::Type::Thruster && el.follow_slope;
+  Eigen::Vector2d f, df_dth;
+  applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df_dth);
+  const Eigen::MatrixXd df_dq = follows ? Eigen::MatrixXd(df_dth * dphi) : Eigen::MatrixXd::Zero(2, n);
   // Body components w = Cᵀ f; then M_o = wᵀ J p = -w_x u_a + w_y x_a, Q = Φ_aᵀ w_y.
   const Eigen::Matrix2d C = rot(theta);
   const double xa = x_[e], ua = phi.dot(q);
@@ -160,16 +165,10 @@ void FlexibleBody::add_element_force(int e, double theta, const Eigen::Ref<const
     return;
   }
   // Same steps as element_force, along one direction (d_theta, d_q) instead of a Jacobian.
-  Eigen::Vector2d f, df = Eigen::Vector2d::Zero();
-  if (el.type == ForceElement::Type::Force) {
-    f = el.direction;
-  } else {
-    const double psi = theta + (el.follow_slope ? dphi.dot(q) : 0.0);
-    const Eigen::Matrix2d Cp = rot(psi);
-    f = Cp * el.direction;
-    const double d_psi = d_theta + (el.follow_slope && d_q ? dphi.dot(*d_q) : 0.0);
-    df = d_psi * (Cp * kJ * el.direction);
-  }
+  const bool follows = el.type == ForceElement::Type::Thruster && el.follow_slope;
+  Eigen::Vector2d f, df;
+  applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df);
+  df *= d_theta + (follows && d_q ? dphi.dot(*d_q) : 0.0);
   const Eigen::Matrix2d C = rot(theta);
   const double xa = x_[e], ua = phi.dot(q);
   const Eigen::Vector2d w = C.transpose() * f;

@@ -2,14 +2,12 @@
 
 #include <cmath>
 
+#include "planar.hpp"
+
 namespace freeflex {
 namespace {
-Eigen::Matrix2d rot(double a) {
-  Eigen::Matrix2d C;
-  C << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
-  return C;
-}
-const Eigen::Matrix2d kJ = (Eigen::Matrix2d() << 0.0, -1.0, 1.0, 0.0).finished();
+using planar::rot;
+const Eigen::Matrix2d& kJ = planar::J();
 }  // namespace
 
 FullModel::Data FullModel::create_data() const {

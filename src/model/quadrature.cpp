@@ -3,8 +3,22 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace freeflex {
+
+namespace {
+/// P_n(x) and P_n'(x) by the three-term recurrence.
+std::pair<double, double> legendre(int n, double x) {
+  double p0 = 1.0, p1 = x;
+  for (int k = 2; k <= n; ++k) {
+    const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+    p0 = p1;
+    p1 = p2;
+  }
+  return {p1, n * (x * p1 - p0) / (x * x - 1.0)};
+}
+}  // namespace
 
 GaussRule gauss_legendre(int n) {
   if (n < 1) throw std::invalid_argument("gauss_legendre: n must be >= 1, got " + std::to_string(n));
@@ -12,27 +26,13 @@ GaussRule gauss_legendre(int n) {
   // Newton on P_n from Tricomi's initial guess; converges in a few steps to round-off.
   for (int i = 0; i < (n + 1) / 2; ++i) {
     double x = std::cos(M_PI * (i + 0.75) / (n + 0.5));
-    double dp = 1.0;
     for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = x;
-      for (int k = 2; k <= n; ++k) {
-        const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      dp = n * (x * p1 - p0) / (x * x - 1.0);
-      const double dx = p1 / dp;
+      const auto [p, dp] = legendre(n, x);
+      const double dx = p / dp;
       x -= dx;
       if (std::abs(dx) < 1e-16) break;
     }
-    // recompute derivative at the converged node
-    double p0 = 1.0, p1 = x;
-    for (int k = 2; k <= n; ++k) {
-      const double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
-      p0 = p1;
-      p1 = p2;
-    }
-    dp = n * (x * p1 - p0) / (x * x - 1.0);
+    const double dp = legendre(n, x).second;
     const double w = 2.0 / ((1.0 - x * x) * dp * dp);
     r.nodes(i) = -x;
     r.nodes(n - 1 - i) = x;

@@ -6,26 +6,15 @@
 
 #include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/dynamics/full_model.hpp"
+#include "support/bodies.hpp"
 
 using namespace freeflex;
 
 namespace {
 
-/// A beam that exercises every term: o off the mass centre (S_o != 0), a hub, a tip
-/// mass, two segments, an inertial force, a follower thruster, a body thruster, a torque.
+/// The rich beam and its four elements (tests/support/bodies.hpp).
 FlexibleBody rich_body(int noa, std::vector<double> damping = {}) {
-  BeamProperties p;
-  p.segments = {{0.6, 1.2, 2.0}, {0.5, 0.7, 1.1}};
-  p.reference_m = 0.45;
-  p.hub_mass_kg = 0.3;
-  p.hub_rotary_inertia_kgm2 = 0.02;
-  p.point_masses = {{1.1, 0.25}};
-  std::vector<ForceElement> el;
-  el.push_back({"force", ForceElement::Type::Force, 0.9, {0.3, -0.8}, false});
-  el.push_back({"follower", ForceElement::Type::Thruster, 1.1, {0.2, 1.0}, true});
-  el.push_back({"thruster", ForceElement::Type::Thruster, 0.1, {-0.5, 0.4}, false});
-  el.push_back({"torque", ForceElement::Type::Torque, 0.7, {0.0, 0.0}, false});
-  return FlexibleBody(Beam(p), noa, el, std::move(damping));
+  return FlexibleBody(Beam(freeflex_test::rich_beam()), noa, freeflex_test::rich_elements(), std::move(damping));
 }
 
 /// A fixed rigid state returned at every instant: the linearization point.

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "freeflex/sim/simulate.hpp"
+#include "support/bodies.hpp"
 
 using namespace freeflex;
 
@@ -81,19 +82,12 @@ TEST_CASE("paper moment example: only theta and antisymmetric q; perturbation di
 }
 
 namespace {
-/// A beam that exercises every term: S_o != 0, hub, tip mass, two segments, an inertial
-/// force, a follower thruster and a torque, with the paper's pulse timing.
+/// The rich beam with an inertial force, a follower thruster and a torque, with the
+/// paper's pulse timing (tests/support/bodies.hpp).
 FlexibleBody rich_body() {
-  BeamProperties p;
-  p.segments = {{0.6, 1.2, 2.0}, {0.5, 0.7, 1.5}};
-  p.reference_m = 0.45;
-  p.hub_mass_kg = 0.3;
-  p.hub_rotary_inertia_kgm2 = 0.02;
-  p.point_masses = {{1.1, 0.25}};
-  return FlexibleBody(Beam(p), 6,
-                      {{"force", ForceElement::Type::Force, 0.9, {0.3, -0.8}, false},
-                       {"follower", ForceElement::Type::Thruster, 1.1, {0.2, 1.0}, true},
-                       {"torque", ForceElement::Type::Torque, 0.7, {0.0, 0.0}, false}});
+  auto el = freeflex_test::rich_elements();
+  el.erase(el.begin() + 2);  // no body thruster: three loads
+  return FlexibleBody(Beam(freeflex_test::rich_beam()), 6, el);
 }
 Excitation rich_loads(double eps) { return Excitation{{pulse(eps), pulse(0.5 * eps), pulse(0.3 * eps)}}; }
 
