@@ -68,8 +68,14 @@ int run_design(const Design& design, const RunOptions& options) {
     run_free_vibration(design, out, studies);
     any = true;
   }
-  if (design.simulation) {
-    code = std::max(code, run_simulation(design, out, studies));
+  ManeuverOutcome maneuver;
+  if (design.maneuver) {
+    maneuver = run_maneuver(design, out, studies, options.quiet);
+    code = std::max(code, maneuver.code);
+    any = true;
+  }
+  if (design.simulation && maneuver.code == kExitOk) {
+    code = std::max(code, run_simulation(design, out, studies, design.maneuver ? &maneuver : nullptr));
     any = true;
   }
   if (!any) out.warn("the design asks for no study; add [free_vibration] or [simulation] (see README, design keys)");

@@ -78,15 +78,31 @@ double drift(const Eigen::MatrixXd& d, int c, int width, double t_from, double s
 
 }  // namespace
 
-int run_simulation(const Design& design, RunOutput& out, Json& summary) {
+int run_simulation(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver) {
   const SimulationStudy& st = *design.simulation;
   const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
-  const Excitation ex = design.excitation();
+  Excitation ex = design.excitation();
+  std::shared_ptr<const RigidTrajectory> nominal;
+  if (maneuver && maneuver->trajectory) {
+    // The optimized commands drive their actuators; the optimized motion is the nominal.
+    auto traj = maneuver->trajectory;
+    const std::vector<int> idx = maneuver->actuators;
+    ex.add_commands = [traj, idx](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) {
+      if (at.piece_mid > traj->t_end()) return;
+      const Eigen::VectorXd u = traj->control_at(at);
+      for (std::size_t k = 0; k < idx.size(); ++k) c(idx[k]) += u(static_cast<Eigen::Index>(k));
+    };
+    const Eigen::VectorXd& knots = traj->knot_times();
+    ex.add_breakpoints.assign(knots.data(), knots.data() + knots.size());
+    ex.add_end_time = maneuver->duration_s;
+    nominal = std::make_shared<ExtendedTrajectory>(traj, maneuver->duration_s);
+  }
   const int n = body.n();
   std::ostream* log = out.log();
   Json js = Json::object();
   const double t_off = ex.end_time();
   js["loads_end_s"] = t_off;
+  js["nominal"] = nominal ? "optimized maneuver" : "zero-order simulation";
   js["duration_s"] = st.options.duration_s;
   int code = kExitOk;
 
@@ -122,7 +138,8 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary) {
   }
   if (st.perturbation) {
     if (log) *log << "simulation: perturbation (zero-order, then first-order) ... " << std::flush;
-    const PerturbationResult p = simulate_perturbation(body, ex, st.options);
+    const PerturbationResult p =
+        nominal ? simulate_perturbation_about(body, ex, nominal, st.options) : simulate_perturbation(body, ex, st.options);
     pt = p.total;
     if (log) *log << (pt.ok ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
                   << pt.wall_time_s << " s)" << std::defaultfloat << '\n';

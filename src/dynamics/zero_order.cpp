@@ -86,4 +86,19 @@ RigidState SampledRigidTrajectory::at(const Instant& when) const {
   return r;
 }
 
+RigidState ExtendedTrajectory::at(const Instant& when) const {
+  const double end = inner_->t_end();
+  if (when.piece_mid <= end && when.t <= end) return inner_->at(when);
+  RigidState s = inner_->at({end, end});
+  s.pos += s.vel * (when.t - end);
+  s.acc.setZero();
+  return s;
+}
+
+std::vector<double> ExtendedTrajectory::breakpoints() const {
+  std::vector<double> b = inner_->breakpoints();
+  b.push_back(inner_->t_end());
+  return b;
+}
+
 }  // namespace freeflex

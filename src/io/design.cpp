@@ -244,9 +244,118 @@ void read_simulation(Section& root, Design& d) {
   st.rigid_figure = s.string("rigid_figure", false, true).value_or(st.rigid_figure);
   st.elastic_figure = s.string("elastic_figure", false, true).value_or(st.elastic_figure);
   s.finish();
-  if (d.loads.empty() && d.actuators.empty())
-    s.problem("duration_s", "[simulation] needs at least one [[load]] to respond to");
+  if (d.loads.empty() && !root.has("maneuver"))
+    s.problem("duration_s", "[simulation] needs at least one [[load]] or a [maneuver] to respond to");
   d.simulation = st;
+}
+
+/// [maneuver.initial] / [maneuver.final]: position_m, theta_deg, velocity_m_s, theta_rate_deg_s.
+Eigen::Matrix<double, 6, 1> read_state(Section& m, const std::string& key) {
+  Eigen::Matrix<double, 6, 1> x = Eigen::Matrix<double, 6, 1>::Zero();
+  Section s = m.table(key);
+  if (!s.present()) return x;
+  auto pair = [&](const std::string& k, int at) {
+    auto v = s.number_array(k, Range(), false);
+    if (!v) return;
+    if (v->size() != 2) {
+      s.problem(k, s.key_path(k) + " must have two components [x, y], got " + std::to_string(v->size()));
+      return;
+    }
+    x(at) = (*v)[0];
+    x(at + 1) = (*v)[1];
+  };
+  pair("position_m", 0);
+  pair("velocity_m_s", 3);
+  x(2) = s.number("theta_deg", Range(), false).value_or(0.0) * M_PI / 180.0;  // degrees only in files
+  x(5) = s.number("theta_rate_deg_s", Range(), false).value_or(0.0) * M_PI / 180.0;
+  s.finish();
+  return x;
+}
+
+void read_maneuver(Section& root, Design& d) {
+  Section m = root.table("maneuver");
+  if (!m.present()) return;
+  ManeuverStudy st;
+  ManeuverProblem& p = st.problem;
+  TrajoptOptions& o = st.options;
+  // actuators by name, with their limits as bounds
+  auto list = m.string_array("actuators", true);
+  if (list) {
+    std::vector<double> lo, hi;
+    for (const auto& name : *list) {
+      int found = -1;
+      for (std::size_t i = 0; i < d.actuators.size(); ++i)
+        if (d.actuators[i].element.name == name) found = static_cast<int>(i);
+      if (found < 0) {
+        std::string known;
+        for (const auto& a : d.actuators) known += (known.empty() ? "'" : ", '") + a.element.name + "'";
+        m.problem("actuators", m.key_path("actuators") + ": \"" + name + "\" is not an [[actuator]] (known: " +
+                                   (known.empty() ? "none" : known) + ")");
+        continue;
+      }
+      p.actuators.push_back(static_cast<int>(d.loads.size()) + found);
+      st.actuator_names.push_back(name);
+      const double lim = d.actuators[found].limit;
+      lo.push_back(lim > 0 ? -lim : -ManeuverProblem::inf);
+      hi.push_back(lim > 0 ? lim : ManeuverProblem::inf);
+    }
+    p.u_min = Eigen::Map<Eigen::VectorXd>(lo.data(), static_cast<Eigen::Index>(lo.size()));
+    p.u_max = Eigen::Map<Eigen::VectorXd>(hi.data(), static_cast<Eigen::Index>(hi.size()));
+  }
+  const std::size_t nu = p.actuators.size();
+  p.x_initial = read_state(m, "initial");
+  p.x_final = read_state(m, "final");
+  const std::string objective =
+      m.choice("objective", {"energy", "time", "smooth", "weighted"}, false).value_or("energy");
+  const bool time_objective = objective == "time" || (objective == "weighted" && m.has("time_weight"));
+  p.free_time = m.boolean("free_duration", false).value_or(time_objective);
+  if (objective == "time" && !p.free_time)
+    m.problem("free_duration", m.key_path("free_duration") + " = false, but objective \"time\" needs a free duration");
+  auto dur = m.number("duration_s", Range::positive(), !p.free_time);
+  p.t_min_s = m.number("duration_min_s", Range::positive(), false).value_or(0.1);
+  p.t_max_s = m.number("duration_max_s", Range::positive(), false).value_or(10.0);
+  p.duration_s = dur.value_or(0.5 * (p.t_min_s + p.t_max_s));
+  if (p.free_time && p.t_min_s > p.t_max_s)
+    m.problem("duration_min_s", m.key_path("duration_min_s") + " must not exceed duration_max_s");
+  p.w_energy = objective == "energy" ? 1.0 : 0.0;
+  p.w_time = objective == "time" ? 1.0 : 0.0;
+  p.w_smooth = objective == "smooth" ? 1.0 : 0.0;
+  if (objective == "weighted") {
+    p.w_energy = m.number("energy_weight", Range::nonnegative(), false).value_or(0.0);
+    p.w_time = m.number("time_weight", Range::nonnegative(), false).value_or(0.0);
+    p.w_smooth = m.number("smooth_weight", Range::nonnegative(), false).value_or(0.0);
+    if (p.w_energy + p.w_time + p.w_smooth <= 0.0)
+      m.problem("objective", m.key_path("objective") + " = \"weighted\" needs energy_weight, time_weight or "
+                                                        "smooth_weight > 0");
+  } else {
+    for (const char* k : {"energy_weight", "time_weight", "smooth_weight"})
+      if (m.has(k)) m.problem(k, m.key_path(k) + " applies to objective = \"weighted\" only");
+    for (const char* k : {"energy_weight", "time_weight", "smooth_weight"}) m.number(k, Range(), false);
+  }
+  if (time_objective && !p.free_time && p.w_time > 0.0)
+    m.problem("time_weight", m.key_path("time_weight") + " > 0 needs free_duration = true");
+  if (auto w = m.number_array("actuator_weights", Range::nonnegative(), false)) {
+    if (w->size() != nu) m.problem("actuator_weights", m.key_path("actuator_weights") + " needs one entry per actuator (" + std::to_string(nu) + ")");
+    else p.energy_weights = Eigen::Map<const Eigen::VectorXd>(w->data(), static_cast<Eigen::Index>(w->size()));
+  }
+  if (auto r = m.number_array("rate_limits", Range::positive(), false)) {
+    if (r->size() != nu) m.problem("rate_limits", m.key_path("rate_limits") + " needs one entry per actuator (" + std::to_string(nu) + ")");
+    else p.du_max = Eigen::Map<const Eigen::VectorXd>(r->data(), static_cast<Eigen::Index>(r->size()));
+  }
+  const std::string tr = m.choice("transcription", {"hermite_simpson", "trapezoidal"}, false).value_or("hermite_simpson");
+  o.transcription = tr == "trapezoidal" ? Transcription::Trapezoidal : Transcription::HermiteSimpson;
+  o.intervals = static_cast<int>(m.integer("intervals", 1, 100000, false).value_or(100));
+  o.mesh_refinements = static_cast<int>(m.integer("mesh_refinements", 0, 20, false).value_or(0));
+  o.mesh_tolerance = m.number("mesh_tolerance", Range::positive(), false).value_or(1e-6);
+  o.tol = m.number("tolerance", Range{0.0, 1.0, true, true}, false).value_or(1e-8);
+  o.max_iter = static_cast<int>(m.integer("max_iterations", 1, 1000000, false).value_or(3000));
+  o.verbose = !m.boolean("quiet", false).value_or(false);
+  Section ip = m.table("ipopt");
+  if (ip.present()) {
+    for (const auto& [key, value] : ip.raw_entries()) o.ipopt_options.emplace_back(key, value);
+  }
+  m.finish();
+  d.maneuver = st;
 }
 
 }  // namespace
@@ -293,6 +402,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   read_loads_and_actuators(root, d);
   read_damping(root, d);
   read_simulation(root, d);
+  read_maneuver(root, d);
   root.finish();
   if (problems.empty()) {
     try {

@@ -1,6 +1,7 @@
 #include "design_reader.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace freeflex::io_detail {
@@ -212,6 +213,51 @@ std::optional<std::vector<double>> Section::number_array(const std::string& key,
       return std::nullopt;
     }
     out.push_back(*e.value<double>());
+  }
+  return out;
+}
+
+std::optional<std::vector<std::string>> Section::string_array(const std::string& key, bool required) {
+  const toml::node* n = get(key);
+  if (!n) {
+    if (required) problems_.add(line_, key_path(key) + " is required (an array of strings)");
+    return std::nullopt;
+  }
+  const toml::array* arr = n->as_array();
+  if (!arr || arr->empty()) {
+    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", must be a non-empty array of strings");
+    return std::nullopt;
+  }
+  std::vector<std::string> out;
+  for (const auto& e : *arr) {
+    if (!e.is_string()) {
+      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", each entry must be a string");
+      return std::nullopt;
+    }
+    out.push_back(*e.value<std::string>());
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, std::string>> Section::raw_entries() {
+  std::vector<std::pair<std::string, std::string>> out;
+  if (!table_) return out;
+  for (const auto& [k, v] : *table_) {
+    const std::string key(k.str());
+    asked_.insert(key);
+    if (v.is_string()) {
+      out.emplace_back(key, *v.value<std::string>());
+    } else if (v.is_integer()) {
+      out.emplace_back(key, std::to_string(*v.value<long long>()));
+    } else if (v.is_floating_point()) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.17g", *v.value<double>());
+      out.emplace_back(key, buf);
+    } else if (v.is_boolean()) {
+      out.emplace_back(key, *v.value<bool>() ? "yes" : "no");
+    } else {
+      problems_.add(line_of(v), key_path(key) + " must be a string, number or boolean (it is passed to the solver)");
+    }
   }
   return out;
 }

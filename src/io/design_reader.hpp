@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 #include <set>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,11 @@ class Section {
                                     bool required);
   std::optional<std::vector<long long>> integer_array(const std::string& key, long long lo, long long hi,
                                                       bool required);
+  std::optional<std::vector<std::string>> string_array(const std::string& key, bool required);
+  /// Every entry of this table as (key, value text), for options passed through to a
+  /// library (strings as written, numbers in full precision, booleans as yes/no).
+  /// Nested tables and arrays are problems.
+  std::vector<std::pair<std::string, std::string>> raw_entries();
   std::optional<std::vector<double>> number_array(const std::string& key, const Range& range,
                                                   bool required);
   /// A sub-table ([beam.hub]); absent gives a Section with present() false.

@@ -35,7 +35,7 @@ std::string render_plot(const PlotSpec& spec, const std::string& dir) {
      << "set terminal pngcairo size " << spec.width_px << "," << height << " font 'Sans,10'\n"
      << "set output outfile\n"
      << "set datafile separator ','\n"
-     << "set grid\nset key outside right top\n";
+     << "set grid\nset key outside right top noenhanced\nset termoption noenhanced\n";
   if (panels > 1)
     gp << "set multiplot layout " << panels << ",1 title " << quoted(spec.title) << "\n";
   else

@@ -118,3 +118,35 @@ TEST_CASE("a bad simulation design exits 2 naming the key and line", "[cli]") {
   CHECK_THAT(r.output, Contains("line 15: simulation.atol = -1, must be > 0"));
   CHECK(!exists(out));
 }
+
+TEST_CASE("run on the minimum-energy slew writes the trajectory and the vibration it leaves", "[cli][trajopt]") {
+  const std::string out = temp_path("slew");
+  const CliResult r =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/slew_energy.toml --out " + out + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK(read(out + "/trajectory.csv").rfind("t,Rx,Ry,theta,Rx_dot,Ry_dot,theta_dot,thruster_left,thruster_right\n", 0) ==
+        0);
+  const std::string summary = read(out + "/summary.json");
+  for (const char* key : {"\"status\": \"ok\"", "\"objective\"", "\"iterations\"", "\"solve_time_s\"", "\"duration_s\"",
+                          "\"max_defect\"", "\"nominal\": \"optimized maneuver\"", "\"max_abs_dq\""})
+    CHECK_THAT(summary, Contains(key));
+  CHECK(exists(out + "/nonlinear.csv"));
+  CHECK(exists(out + "/perturbation.csv"));
+}
+
+TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {
+  const std::string design = write_temp("unreachable",
+                                        "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n"
+                                        "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 0.01\n"
+                                        "[maneuver]\nactuators = [\"hub\"]\nduration_s = 0.5\nintervals = 20\nquiet = true\n"
+                                        "[maneuver.final]\ntheta_deg = 3000.0\n");
+  const std::string out = temp_path("unreachable_out");
+  const CliResult r = run_cli("run " + design + " --out " + out);
+  INFO(r.output);
+  CHECK(r.exit_code == 1);
+  CHECK_THAT(r.output, Contains("did not succeed (infeasible)"));
+  CHECK(!exists(out + "/trajectory.csv"));
+  CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"failed\""));
+  CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"infeasible\""));
+}

@@ -137,3 +137,29 @@ TEST_CASE("bad loads and tolerances name key and line", "[io]") {
   CHECK_THAT(problems_of(kPaperBeam + kLoad + kLoad), Contains("load[2].name = \"F\" is used twice"));
   CHECK_THAT(problems_of(kPaperBeam + "[simulation]\nduration_s = 1.0\n"), Contains("needs at least one [[load]]"));
 }
+
+TEST_CASE("maneuver keys load; unknown actuator names and bad weights are reported", "[io]") {
+  const std::string act = "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 2.0\n";  // 5-9
+  const Design d = parse_design(kPaperBeam + act +
+                                    "[maneuver]\nactuators = [\"hub\"]\nobjective = \"time\"\nduration_max_s = 4.0\n"
+                                    "transcription = \"trapezoidal\"\nintervals = 40\n[maneuver.final]\ntheta_deg = 90\n"
+                                    "[maneuver.ipopt]\nmu_strategy = \"adaptive\"\nacceptable_iter = 5\n",
+                                "t.toml");
+  REQUIRE(d.maneuver);
+  const ManeuverProblem& p = d.maneuver->problem;
+  CHECK(p.actuators == std::vector<int>{0});
+  CHECK(p.u_max(0) == 2.0);
+  CHECK(p.u_min(0) == -2.0);
+  CHECK(p.free_time);
+  CHECK(p.w_time == 1.0);
+  CHECK(p.t_max_s == 4.0);
+  CHECK(p.x_final(2) == Approx(M_PI / 2));
+  CHECK(d.maneuver->options.transcription == Transcription::Trapezoidal);
+  CHECK(d.maneuver->options.ipopt_options.size() == 2);
+  CHECK_THAT(problems_of(kPaperBeam + act + "[maneuver]\nactuators = [\"tip\"]\nduration_s = 1.0\n"),
+             Contains("line 11: maneuver.actuators: \"tip\" is not an [[actuator]] (known: 'hub')"));
+  CHECK_THAT(problems_of(kPaperBeam + act + "[maneuver]\nactuators = [\"hub\"]\nobjective = \"time\"\nfree_duration = false\n"),
+             Contains("objective \"time\" needs a free duration"));
+  CHECK_THAT(problems_of(kPaperBeam + act + "[maneuver]\nactuators = [\"hub\"]\nduration_s = -3\n"),
+             Contains("line 12: maneuver.duration_s = -3, must be > 0"));
+}

@@ -1,5 +1,6 @@
 #pragma once
 // The application layer: what `freeflex run` and `freeflex modes` do with a design.
+#include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -9,6 +10,7 @@
 #include "freeflex/io/design.hpp"
 #include "freeflex/io/output.hpp"
 #include "freeflex/io/plot.hpp"
+#include "freeflex/trajopt/solve.hpp"
 
 namespace freeflex {
 
@@ -59,7 +61,16 @@ int run_design(const Design& design, const RunOptions& options);
 
 /// The [free_vibration] study; adds its results to `summary`.
 void run_free_vibration(const Design& design, RunOutput& out, Json& summary);
-/// The [simulation] study; returns an ExitCode.
-int run_simulation(const Design& design, RunOutput& out, Json& summary);
+/// What [maneuver] hands to [simulation]: the optimized motion and its commands.
+struct ManeuverOutcome {
+  int code = kExitOk;
+  std::shared_ptr<const CollocationTrajectory> trajectory;  ///< null if it failed
+  std::vector<int> actuators;                               ///< element index of each command
+  double duration_s = 0.0;
+};
+/// The [maneuver] study.
+ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary, bool quiet);
+/// The [simulation] study, about the optimized maneuver if one is given; returns an ExitCode.
+int run_simulation(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver = nullptr);
 
 }  // namespace freeflex

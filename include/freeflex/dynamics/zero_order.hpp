@@ -66,4 +66,20 @@ class SampledRigidTrajectory : public RigidTrajectory {
   std::vector<Piece> pieces_;
 };
 
+/// A trajectory continued past its end by uniform motion (rate held, acceleration zero):
+/// a maneuver that ends at rest stays at rest. The end is a breakpoint.
+class ExtendedTrajectory : public RigidTrajectory {
+ public:
+  ExtendedTrajectory(std::shared_ptr<const RigidTrajectory> inner, double t_end)
+      : inner_(std::move(inner)), t_end_(t_end) {}
+  RigidState at(const Instant& when) const override;
+  double t_begin() const override { return inner_->t_begin(); }
+  double t_end() const override { return t_end_; }
+  std::vector<double> breakpoints() const override;
+
+ private:
+  std::shared_ptr<const RigidTrajectory> inner_;
+  double t_end_;
+};
+
 }  // namespace freeflex

@@ -12,6 +12,7 @@
 #include "freeflex/model/beam.hpp"
 #include "freeflex/model/loads.hpp"
 #include "freeflex/sim/simulate.hpp"
+#include "freeflex/trajopt/problem.hpp"
 
 namespace freeflex {
 
@@ -64,6 +65,13 @@ struct SimulationStudy {
   std::string elastic_figure = "generalized_displacements";
 };
 
+/// [maneuver]: an optimal rigid maneuver with the design's actuators.
+struct ManeuverStudy {
+  ManeuverProblem problem;                  ///< actuator indices into Design::force_elements()
+  TrajoptOptions options;
+  std::vector<std::string> actuator_names;  ///< in the order of problem.actuators
+};
+
 struct Design {
   std::string source;  ///< file name, for messages
   std::string title;
@@ -75,6 +83,7 @@ struct Design {
   std::vector<double> damping_ratios;  ///< [damping] ratios, per elastic mode
   std::optional<FreeVibrationStudy> free_vibration;
   std::optional<SimulationStudy> simulation;
+  std::optional<ManeuverStudy> maneuver;
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;
