@@ -78,6 +78,10 @@ int run_design(const Design& design, const RunOptions& options) {
     code = std::max(code, run_simulation(design, out, studies, design.maneuver ? &maneuver : nullptr));
     any = true;
   }
+  if (design.controller && maneuver.code == kExitOk) {
+    code = std::max(code, run_suppression(design, out, studies, design.maneuver ? &maneuver : nullptr));
+    any = true;
+  }
   if (!any) out.warn("the design asks for no study; add [free_vibration] or [simulation] (see README, design keys)");
   summary["status"] = code == kExitOk ? "ok" : "failed";
   summary["studies"] = studies;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "design_reader.hpp"
@@ -358,6 +359,78 @@ void read_maneuver(Section& root, Design& d) {
   d.maneuver = st;
 }
 
+/// Resolves [[actuator]] names to element indices (loads come first in force_elements()).
+std::vector<int> actuator_indices(Section& s, const std::string& key, const std::vector<std::string>& names,
+                                  const Design& d) {
+  std::vector<int> idx;
+  for (const auto& name : names) {
+    int found = -1;
+    for (std::size_t i = 0; i < d.actuators.size(); ++i)
+      if (d.actuators[i].element.name == name) found = static_cast<int>(i);
+    if (found < 0) {
+      std::string known;
+      for (const auto& a : d.actuators) known += (known.empty() ? "'" : ", '") + a.element.name + "'";
+      s.problem(key, s.key_path(key) + ": \"" + name + "\" is not an [[actuator]] (known: " +
+                         (known.empty() ? "none" : known) + ")");
+      continue;
+    }
+    idx.push_back(static_cast<int>(d.loads.size()) + found);
+  }
+  return idx;
+}
+
+void read_controller(Section& root, Design& d) {
+  Section c = root.table("controller");
+  if (!c.present()) return;
+  ControllerStudy st;
+  c.choice("type", {"tvlqr"}, false);
+  if (auto names = c.string_array("actuators", true)) {
+    st.actuators = actuator_indices(c, "actuators", *names, d);
+    if (st.actuators.size() == names->size()) st.actuator_names = *names;
+  }
+  const std::size_t m = st.actuators.size();
+  st.limits.resize(static_cast<Eigen::Index>(m));
+  for (std::size_t k = 0; k < m; ++k) {
+    const double lim = d.actuators[st.actuators[k] - d.loads.size()].limit;
+    st.limits(static_cast<Eigen::Index>(k)) = lim > 0 ? lim : std::numeric_limits<double>::infinity();
+  }
+  st.horizon_s = c.number("horizon_s", Range::positive(), true).value_or(st.horizon_s);
+  st.weight_elastic = c.number("weight_elastic", Range::nonnegative(), false).value_or(1.0);
+  st.weight_rigid_position = c.number("weight_rigid_position", Range::nonnegative(), false).value_or(1.0);
+  st.weight_rigid_rate = c.number("weight_rigid_rate", Range::nonnegative(), false).value_or(1.0);
+  st.input_weights = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(m));
+  if (c.has("input_weights")) {
+    auto w = c.number_array("input_weights", Range::positive(), false);
+    if (!w) {
+      // problem already reported (e.g. "each entry must be > 0: R must be positive definite")
+    } else if (w->size() != m) {
+      c.problem("input_weights", c.key_path("input_weights") + " needs one entry per actuator (" + std::to_string(m) + ")");
+    } else {
+      st.input_weights = Eigen::Map<const Eigen::VectorXd>(w->data(), static_cast<Eigen::Index>(m));
+    }
+  }
+  if (st.weight_elastic + st.weight_rigid_position + st.weight_rigid_rate <= 0.0)
+    c.problem("weight_elastic", "controller: every state weight is zero; Q must weight something");
+  st.grid_step_s = c.number("grid_step_s", Range::positive(), false).value_or(0.005);
+  st.simulate_until_s = c.number("simulate_until_s", Range::positive(), false).value_or(st.horizon_s);
+  st.figure = c.string("figure", false, true).value_or("comparison");
+  c.finish();
+  if (!d.loads.empty() && !d.maneuver) {
+    double end = 0.0;
+    for (const auto& l : d.loads) end = std::max(end, l.profile.times().back());
+    if (st.horizon_s < end)
+      c.problem("horizon_s", c.key_path("horizon_s") + " = " + std::to_string(st.horizon_s) +
+                                 ", shorter than the maneuver (its loads act until " + std::to_string(end) + " s)");
+  }
+  if (d.maneuver) {
+    for (int a : d.maneuver->problem.actuators)
+      if (std::find(st.actuators.begin(), st.actuators.end(), a) == st.actuators.end())
+        c.problem("actuators", c.key_path("actuators") + " must include every maneuver actuator (the feedback adds "
+                                                         "to their commands)");
+  }
+  d.controller = st;
+}
+
 }  // namespace
 
 std::vector<ForceElement> Design::force_elements() const {
@@ -403,6 +476,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   read_damping(root, d);
   read_simulation(root, d);
   read_maneuver(root, d);
+  read_controller(root, d);
   root.finish();
   if (problems.empty()) {
     try {

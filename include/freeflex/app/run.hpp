@@ -70,6 +70,8 @@ struct ManeuverOutcome {
 };
 /// The [maneuver] study.
 ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary, bool quiet);
+/// The [controller] study: TV-LQR against the open loop, comparison.csv; returns an ExitCode.
+int run_suppression(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver = nullptr);
 /// The [simulation] study, about the optimized maneuver if one is given; returns an ExitCode.
 int run_simulation(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver = nullptr);
 

@@ -72,6 +72,21 @@ struct ManeuverStudy {
   std::vector<std::string> actuator_names;  ///< in the order of problem.actuators
 };
 
+/// [controller]: feedback designed on the first-order model about the nominal motion.
+struct ControllerStudy {
+  std::vector<std::string> actuator_names;
+  std::vector<int> actuators;       ///< element indices, in the order of actuator_names
+  Eigen::VectorXd limits;           ///< |u| bound per feedback actuator (infinity: none)
+  double horizon_s = 3.0;           ///< TV-LQR over [0, horizon_s]
+  double weight_elastic = 1.0;      ///< on blockdiag(K, M) of (q, q')
+  double weight_rigid_position = 1.0;
+  double weight_rigid_rate = 1.0;
+  Eigen::VectorXd input_weights;    ///< R diagonal, one per actuator (> 0)
+  double grid_step_s = 0.005;
+  double simulate_until_s = 0.0;    ///< end of the comparison runs (0: the horizon)
+  std::string figure = "comparison";
+};
+
 struct Design {
   std::string source;  ///< file name, for messages
   std::string title;
@@ -84,6 +99,7 @@ struct Design {
   std::optional<FreeVibrationStudy> free_vibration;
   std::optional<SimulationStudy> simulation;
   std::optional<ManeuverStudy> maneuver;
+  std::optional<ControllerStudy> controller;
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;

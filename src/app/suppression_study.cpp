@@ -1,0 +1,225 @@
+// [controller]: TV-LQR designed on the first-order model about the nominal motion (the
+// loads' zero-order motion or the optimized maneuver), evaluated on the first-order and
+// the full nonlinear model, against the open-loop baseline: comparison.csv and a figure.
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include "freeflex/app/run.hpp"
+#include "freeflex/control/closed_loop.hpp"
+#include "freeflex/control/lqr.hpp"
+#include "freeflex/control/metrics.hpp"
+#include "freeflex/control/tvlqr.hpp"
+#include "freeflex/io/plot.hpp"
+#include "freeflex/sim/simulate.hpp"
+
+namespace freeflex {
+namespace {
+
+struct Case {
+  std::string name, model;
+  Eigen::VectorXd t;
+  Eigen::MatrixXd z, z_dot, commands;  // commands: every element (loads and actuators)
+  double saturated_fraction = 0.0;
+};
+
+std::string num(double v) {
+  if (std::isnan(v)) return "";
+  std::ostringstream os;
+  os << std::setprecision(10) << v;
+  return os.str();
+}
+
+/// Element commands at the output times: the loads' profiles plus the given actuator
+/// commands (columns in the order of `actuators`).
+Eigen::MatrixXd element_commands(const Excitation& ex, int elements, const Eigen::VectorXd& t,
+                                 const std::vector<int>& actuators, const Eigen::MatrixXd* actuator_commands) {
+  Eigen::MatrixXd c(t.size(), elements);
+  Eigen::VectorXd u(elements);
+  for (int i = 0; i < t.size(); ++i) {
+    ex.evaluate(Instant::at(t(i)), u);
+    c.row(i) = u.transpose();
+    if (actuator_commands)
+      for (std::size_t k = 0; k < actuators.size(); ++k) c(i, actuators[k]) = (*actuator_commands)(i, k);
+  }
+  return c;
+}
+
+}  // namespace
+
+int run_suppression(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver) {
+  const ControllerStudy& st = *design.controller;
+  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
+  const int ne = static_cast<int>(body.elements().size());
+  std::ostream* log = out.log();
+  const double t_end = st.simulate_until_s;
+  SimulationOptions sim = design.simulation ? design.simulation->options : SimulationOptions{};
+  sim.duration_s = t_end;
+  if (!design.simulation) sim.output_step_s = 0.005;
+
+  // Nominal motion and nominal actuator commands u0 (on the feedback actuators).
+  const Excitation loads = design.excitation();
+  Excitation nominal_ex = loads;
+  std::shared_ptr<const RigidTrajectory> nominal;
+  ActuatorCommandFunction u0;
+  if (maneuver && maneuver->trajectory) {
+    auto traj = maneuver->trajectory;
+    const std::vector<int>& man = maneuver->actuators;
+    std::vector<int> slot;  // position of each maneuver actuator among the feedback ones
+    for (int a : man) slot.push_back(static_cast<int>(std::find(st.actuators.begin(), st.actuators.end(), a) - st.actuators.begin()));
+    u0 = [traj, slot](const Instant& at, Eigen::Ref<Eigen::VectorXd> u) {
+      u.setZero();
+      if (at.piece_mid > traj->t_end()) return;
+      const Eigen::VectorXd c = traj->control_at(at);
+      for (std::size_t k = 0; k < slot.size(); ++k) u(slot[k]) = c(static_cast<Eigen::Index>(k));
+    };
+    nominal_ex.add_commands = [traj, man](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) {
+      if (at.piece_mid > traj->t_end()) return;
+      const Eigen::VectorXd u = traj->control_at(at);
+      for (std::size_t k = 0; k < man.size(); ++k) c(man[k]) += u(static_cast<Eigen::Index>(k));
+    };
+    const Eigen::VectorXd& knots = traj->knot_times();
+    nominal_ex.add_breakpoints.assign(knots.data(), knots.data() + knots.size());
+    nominal_ex.add_end_time = maneuver->duration_s;
+    nominal = std::make_shared<ExtendedTrajectory>(traj, maneuver->duration_s);
+    if (maneuver->duration_s > st.horizon_s)
+      throw std::invalid_argument("controller.horizon_s = " + num(st.horizon_s) + " is shorter than the maneuver (" +
+                                  num(maneuver->duration_s) + " s)");
+  }
+
+  std::vector<Case> cases;
+  // Open loop: the perturbation solution and the full model.
+  if (log) *log << "suppression: open loop (perturbation and full model) ..." << std::flush;
+  const PerturbationResult pert = nominal ? simulate_perturbation_about(body, nominal_ex, nominal, sim)
+                                          : simulate_perturbation(body, nominal_ex, sim);
+  if (!pert.total.ok) throw std::runtime_error("open-loop perturbation simulation failed: " + pert.total.message);
+  if (!nominal) nominal = pert.nominal;
+  const SimulationResult full = simulate_full(body, nominal_ex, sim);
+  if (!full.ok) throw std::runtime_error("open-loop full simulation failed: " + full.message);
+  if (log) *log << " done\n";
+  const std::vector<int> none;
+  cases.push_back({"open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
+                   element_commands(nominal_ex, ne, pert.total.t, none, nullptr)});
+  cases.push_back({"open_loop", "nonlinear", full.t, full.z, full.z_dot,
+                   element_commands(nominal_ex, ne, full.t, none, nullptr)});
+
+  // TV-LQR on the first-order model.
+  const FirstOrderModel fo(body, *nominal, nominal_element_commands(loads, st.actuators, u0), st.actuators);
+  TvlqrOptions to;
+  to.t0 = 0.0;
+  to.tf = st.horizon_s;
+  to.Q = vibration_weight(body, st.weight_elastic, st.weight_rigid_position, st.weight_rigid_rate);
+  to.R = st.input_weights.asDiagonal();
+  to.grid_step_s = st.grid_step_s;
+  for (double b : loads.breakpoints()) to.breakpoints.push_back(b);
+  if (log) *log << "suppression: TV-LQR over " << st.horizon_s << " s ..." << std::flush;
+  const TvlqrResult law = solve_tvlqr(fo, to);
+  if (log) *log << (law.ok() ? " done" : " FAILED") << " (" << std::fixed << std::setprecision(3) << law.wall_time_s
+                << " s)" << std::defaultfloat << '\n';
+  Json js = Json::object();
+  js["actuators"] = [&] {
+    Json a = Json::array();
+    for (const auto& n : st.actuator_names) a.push_back(n);
+    return a;
+  }();
+  js["horizon_s"] = st.horizon_s;
+  js["tvlqr_status"] = law.ok() ? "ok" : law.message;
+  js["tvlqr_solve_time_s"] = law.wall_time_s;
+  if (law.terminal_care) {
+    js["terminal_care_residual"] = law.terminal_care->residual;
+    js["terminal_care_residual_normwise"] = law.terminal_care->residual_normwise;
+  }
+  if (!law.ok()) {
+    summary["suppression"] = js;
+    out.warn("TV-LQR failed: " + law.message);
+    return kExitNumericalFailure;
+  }
+  ClosedLoopOptions co;
+  co.t_begin = 0.0;
+  co.t_end = t_end;
+  co.output_step_s = sim.output_step_s;
+  co.limits = st.limits;
+  for (double b : loads.breakpoints()) co.breakpoints.push_back(b);
+  if (log) *log << "suppression: closed loop on the first-order and the full model ..." << std::flush;
+  const ClosedLoopResult cl1 = simulate_closed_loop_first_order(fo, law, u0, co);
+  const ClosedLoopResult cl2 = simulate_closed_loop_full(fo, loads, u0, law, co);
+  if (log) *log << " done\n";
+  int code = kExitOk;
+  for (const auto* r : {&cl1, &cl2}) {
+    if (!r->ok) {
+      out.warn("closed-loop simulation failed: " + r->message);
+      code = kExitNumericalFailure;
+      continue;
+    }
+    Case c{"tvlqr", r == &cl1 ? "first_order" : "nonlinear", r->t, r->z, r->z_dot,
+           element_commands(loads, ne, r->t, st.actuators, &r->commands), r->saturated_fraction};
+    cases.push_back(std::move(c));
+  }
+
+  // Metrics, comparison.csv, per-case histories and the figure.
+  MetricTargets targets;
+  const RigidState end = nominal->at(Instant::at(t_end));
+  targets.R_target = end.pos.head<2>();
+  targets.theta_target = end.pos(2);
+  std::ostringstream csv;
+  csv << "case,model,residual_vibration_energy_J,peak_tip_deflection_m,tip_settling_time_s,final_position_error_m,"
+         "final_attitude_error_rad,control_effort_N2s,peak_command,saturated_fraction\n";
+  Json table = Json::array();
+  PlotSpec fig{st.figure, "Vibration suppression: " + design.title,
+               {{"tip deflection (right end)", "t [s]", "deflection [m]", {}},
+                {"vibration energy", "t [s]", "E_vib [J]", {}}}};
+  const Eigen::RowVectorXd phi_l = body.basis().value(body.beam().x_left());
+  const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
+  const int n = body.n();
+  for (const Case& c : cases) {
+    const ResponseMetrics m = response_metrics(body, c.t, c.z, c.z_dot, c.commands, targets);
+    csv << c.name << ',' << c.model << ',' << num(m.residual_vibration_energy_J) << ','
+        << num(m.peak_tip_deflection_m) << ',' << num(m.tip_settling_time_s) << ',' << num(m.final_position_error_m)
+        << ',' << num(m.final_attitude_error_rad) << ',' << num(m.control_effort) << ',' << num(m.peak_command) << ','
+        << num(c.saturated_fraction) << '\n';
+    Json row = Json::object();
+    row["case"] = c.name;
+    row["model"] = c.model;
+    row["residual_vibration_energy_J"] = m.residual_vibration_energy_J;
+    row["peak_tip_deflection_m"] = m.peak_tip_deflection_m;
+    row["tip_settling_time_s"] = m.tip_settling_time_s;
+    row["final_attitude_error_rad"] = m.final_attitude_error_rad;
+    row["final_position_error_m"] = m.final_position_error_m;
+    row["control_effort_N2s"] = m.control_effort;
+    row["peak_command"] = m.peak_command;
+    row["saturated_fraction"] = c.saturated_fraction;
+    table.push_back(row);
+    // history for the figure
+    Eigen::MatrixXd h(c.t.size(), 4);
+    for (int i = 0; i < c.t.size(); ++i) {
+      const Eigen::VectorXd q = c.z.row(i).tail(n).transpose(), qd = c.z_dot.row(i).tail(n).transpose();
+      h(i, 0) = c.t(i);
+      h(i, 1) = phi_l.dot(q);
+      h(i, 2) = phi_r.dot(q);
+      h(i, 3) = body.vibration_energy(q, qd);
+    }
+    const std::string file = "case_" + c.name + "_" + c.model + ".csv";
+    out.csv(file, {"t", "tip_left_m", "tip_right_m", "vibration_energy_J"}, h);
+    const std::string label = c.name + " (" + c.model + ")";
+    const std::string style = c.model == "nonlinear" ? "lines" : "lines dt 2";
+    fig.panels[0].series.push_back({file, 1, 3, label, style});
+    fig.panels[1].series.push_back({file, 1, 4, label, style});
+  }
+  out.write("comparison.csv", csv.str());
+  out.plot(fig, design.plots);
+  js["cases"] = table;
+  if (log) {
+    *log << "  case          model         E_vib(end) [J]   peak tip [m]   effort [N^2 s]\n";
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      const ResponseMetrics m = response_metrics(body, cases[i].t, cases[i].z, cases[i].z_dot, cases[i].commands, targets);
+      *log << "  " << std::left << std::setw(14) << cases[i].name << std::setw(14) << cases[i].model << std::right
+           << std::setw(14) << std::setprecision(4) << m.residual_vibration_energy_J << std::setw(15)
+           << m.peak_tip_deflection_m << std::setw(17) << m.control_effort << '\n';
+    }
+  }
+  summary["suppression"] = js;
+  return code;
+}
+
+}  // namespace freeflex
