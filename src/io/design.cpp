@@ -250,6 +250,26 @@ void read_simulation(Section& root, Design& d) {
   d.simulation = st;
 }
 
+/// Resolves [[actuator]] names to element indices (loads come first in force_elements()).
+std::vector<int> actuator_indices(Section& s, const std::string& key, const std::vector<std::string>& names,
+                                  const Design& d) {
+  std::vector<int> idx;
+  for (const auto& name : names) {
+    int found = -1;
+    for (std::size_t i = 0; i < d.actuators.size(); ++i)
+      if (d.actuators[i].element.name == name) found = static_cast<int>(i);
+    if (found < 0) {
+      std::string known;
+      for (const auto& a : d.actuators) known += (known.empty() ? "'" : ", '") + a.element.name + "'";
+      s.problem(key, s.key_path(key) + ": \"" + name + "\" is not an [[actuator]] (known: " +
+                         (known.empty() ? "none" : known) + ")");
+      continue;
+    }
+    idx.push_back(static_cast<int>(d.loads.size()) + found);
+  }
+  return idx;
+}
+
 /// [maneuver.initial] / [maneuver.final]: position_m, theta_deg, velocity_m_s, theta_rate_deg_s.
 Eigen::Matrix<double, 6, 1> read_state(Section& m, const std::string& key) {
   Eigen::Matrix<double, 6, 1> x = Eigen::Matrix<double, 6, 1>::Zero();
@@ -280,25 +300,14 @@ void read_maneuver(Section& root, Design& d) {
   ManeuverProblem& p = st.problem;
   TrajoptOptions& o = st.options;
   // actuators by name, with their limits as bounds
-  auto list = m.string_array("actuators", true);
-  if (list) {
+  if (auto list = m.string_array("actuators", true)) {
+    p.actuators = actuator_indices(m, "actuators", *list, d);
     std::vector<double> lo, hi;
-    for (const auto& name : *list) {
-      int found = -1;
-      for (std::size_t i = 0; i < d.actuators.size(); ++i)
-        if (d.actuators[i].element.name == name) found = static_cast<int>(i);
-      if (found < 0) {
-        std::string known;
-        for (const auto& a : d.actuators) known += (known.empty() ? "'" : ", '") + a.element.name + "'";
-        m.problem("actuators", m.key_path("actuators") + ": \"" + name + "\" is not an [[actuator]] (known: " +
-                                   (known.empty() ? "none" : known) + ")");
-        continue;
-      }
-      p.actuators.push_back(static_cast<int>(d.loads.size()) + found);
-      st.actuator_names.push_back(name);
-      const double lim = d.actuators[found].limit;
-      lo.push_back(lim > 0 ? -lim : -ManeuverProblem::inf);
-      hi.push_back(lim > 0 ? lim : ManeuverProblem::inf);
+    for (int e : p.actuators) {
+      const ActuatorSpec& a = d.actuators[static_cast<std::size_t>(e) - d.loads.size()];
+      st.actuator_names.push_back(a.element.name);
+      lo.push_back(a.limit > 0 ? -a.limit : -ManeuverProblem::inf);
+      hi.push_back(a.limit > 0 ? a.limit : ManeuverProblem::inf);
     }
     p.u_min = Eigen::Map<Eigen::VectorXd>(lo.data(), static_cast<Eigen::Index>(lo.size()));
     p.u_max = Eigen::Map<Eigen::VectorXd>(hi.data(), static_cast<Eigen::Index>(hi.size()));
@@ -359,26 +368,6 @@ void read_maneuver(Section& root, Design& d) {
   d.maneuver = st;
 }
 
-/// Resolves [[actuator]] names to element indices (loads come first in force_elements()).
-std::vector<int> actuator_indices(Section& s, const std::string& key, const std::vector<std::string>& names,
-                                  const Design& d) {
-  std::vector<int> idx;
-  for (const auto& name : names) {
-    int found = -1;
-    for (std::size_t i = 0; i < d.actuators.size(); ++i)
-      if (d.actuators[i].element.name == name) found = static_cast<int>(i);
-    if (found < 0) {
-      std::string known;
-      for (const auto& a : d.actuators) known += (known.empty() ? "'" : ", '") + a.element.name + "'";
-      s.problem(key, s.key_path(key) + ": \"" + name + "\" is not an [[actuator]] (known: " +
-                         (known.empty() ? "none" : known) + ")");
-      continue;
-    }
-    idx.push_back(static_cast<int>(d.loads.size()) + found);
-  }
-  return idx;
-}
-
 void read_controller(Section& root, Design& d) {
   Section c = root.table("controller");
   if (!c.present()) return;
@@ -395,14 +384,29 @@ void read_controller(Section& root, Design& d) {
     st.limits(static_cast<Eigen::Index>(k)) = lim > 0 ? lim : std::numeric_limits<double>::infinity();
   }
   st.horizon_s = c.number("horizon_s", Range::positive(), true).value_or(st.horizon_s);
-  st.weight_elastic = c.number("weight_elastic", Range::nonnegative(), false).value_or(1.0);
-  st.weight_rigid_position = c.number("weight_rigid_position", Range::nonnegative(), false).value_or(1.0);
-  st.weight_rigid_rate = c.number("weight_rigid_rate", Range::nonnegative(), false).value_or(1.0);
+  auto state_weight = [&](const char* key) {
+    const double w = c.number(key, Range(), false).value_or(1.0);
+    if (w < 0.0) {
+      c.problem(key, c.key_path(key) + " = " + std::to_string(w) +
+                         ", must be >= 0 (the state weight Q must be positive semidefinite)");
+      return 0.0;
+    }
+    return w;
+  };
+  st.weight_elastic = state_weight("weight_elastic");
+  st.weight_rigid_position = state_weight("weight_rigid_position");
+  st.weight_rigid_rate = state_weight("weight_rigid_rate");
   st.input_weights = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(m));
   if (c.has("input_weights")) {
-    auto w = c.number_array("input_weights", Range::positive(), false);
+    auto w = c.number_array("input_weights", Range(), false);
+    bool pd = true;
+    if (w)
+      for (double x : *w) pd = pd && x > 0.0;
     if (!w) {
-      // problem already reported (e.g. "each entry must be > 0: R must be positive definite")
+      // reported by number_array
+    } else if (!pd) {
+      c.problem("input_weights", c.key_path("input_weights") +
+                                     ": every entry must be > 0 (the input weight R must be positive definite)");
     } else if (w->size() != m) {
       c.problem("input_weights", c.key_path("input_weights") + " needs one entry per actuator (" + std::to_string(m) + ")");
     } else {

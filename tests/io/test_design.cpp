@@ -163,3 +163,29 @@ TEST_CASE("maneuver keys load; unknown actuator names and bad weights are report
   CHECK_THAT(problems_of(kPaperBeam + act + "[maneuver]\nactuators = [\"hub\"]\nduration_s = -3\n"),
              Contains("line 12: maneuver.duration_s = -3, must be > 0"));
 }
+
+TEST_CASE("controller keys load; bad weights, horizons and names are reported", "[io]") {
+  const std::string acts = kLoad +  // lines 5-13
+                           "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 1.0\n";  // 14-18
+  const Design d = parse_design(kPaperBeam + acts +
+                                    "[controller]\nactuators = [\"hub\"]\nhorizon_s = 3.0\nweight_elastic = 5.0\n"
+                                    "input_weights = [2.0]\n",
+                                "t.toml");
+  REQUIRE(d.controller);
+  CHECK(d.controller->actuators == std::vector<int>{1});  // after the one load
+  CHECK(d.controller->limits(0) == 1.0);
+  CHECK(d.controller->input_weights(0) == 2.0);
+  CHECK(d.controller->weight_elastic == 5.0);
+  const std::string head = kPaperBeam + acts + "[controller]\nactuators = [\"hub\"]\n";  // [controller] line 19
+  CHECK_THAT(problems_of(head + "horizon_s = 3.0\nweight_elastic = -1.0\n"),
+             Contains("line 22: controller.weight_elastic = -1.000000, must be >= 0 (the state weight Q must be "
+                      "positive semidefinite)"));
+  CHECK_THAT(problems_of(head + "horizon_s = 3.0\ninput_weights = [0.0]\n"),
+             Contains("line 22: controller.input_weights: every entry must be > 0 (the input weight R must be "
+                      "positive definite)"));
+  CHECK_THAT(problems_of(head + "horizon_s = 0.5\n"),
+             Contains("line 21: controller.horizon_s = 0.500000, shorter than the maneuver (its loads act until "
+                      "1.000000 s)"));
+  CHECK_THAT(problems_of(kPaperBeam + acts + "[controller]\nactuators = [\"rudder\"]\nhorizon_s = 3.0\n"),
+             Contains("line 20: controller.actuators: \"rudder\" is not an [[actuator]] (known: 'hub')"));
+}
