@@ -7,6 +7,23 @@
 
 namespace freeflex {
 
+void ManeuverOutcome::drive(Excitation& ex) const {
+  auto traj = trajectory;
+  const std::vector<int> idx = actuators;
+  ex.add_commands = [traj, idx](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) {
+    if (at.piece_mid > traj->t_end()) return;
+    const Eigen::VectorXd u = traj->control_at(at);
+    for (std::size_t k = 0; k < idx.size(); ++k) c(idx[k]) += u(static_cast<Eigen::Index>(k));
+  };
+  const Eigen::VectorXd& knots = traj->knot_times();
+  ex.add_breakpoints.assign(knots.data(), knots.data() + knots.size());
+  ex.add_end_time = duration_s;
+}
+
+std::shared_ptr<const RigidTrajectory> ManeuverOutcome::nominal() const {
+  return std::make_shared<ExtendedTrajectory>(trajectory, duration_s);
+}
+
 ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary, bool quiet) {
   const ManeuverStudy& st = *design.maneuver;
   const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);

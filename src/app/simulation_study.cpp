@@ -85,17 +85,8 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
   std::shared_ptr<const RigidTrajectory> nominal;
   if (maneuver && maneuver->trajectory) {
     // The optimized commands drive their actuators; the optimized motion is the nominal.
-    auto traj = maneuver->trajectory;
-    const std::vector<int> idx = maneuver->actuators;
-    ex.add_commands = [traj, idx](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) {
-      if (at.piece_mid > traj->t_end()) return;
-      const Eigen::VectorXd u = traj->control_at(at);
-      for (std::size_t k = 0; k < idx.size(); ++k) c(idx[k]) += u(static_cast<Eigen::Index>(k));
-    };
-    const Eigen::VectorXd& knots = traj->knot_times();
-    ex.add_breakpoints.assign(knots.data(), knots.data() + knots.size());
-    ex.add_end_time = maneuver->duration_s;
-    nominal = std::make_shared<ExtendedTrajectory>(traj, maneuver->duration_s);
+    maneuver->drive(ex);
+    nominal = maneuver->nominal();
   }
   const int n = body.n();
   std::ostream* log = out.log();

@@ -74,15 +74,8 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
       const Eigen::VectorXd c = traj->control_at(at);
       for (std::size_t k = 0; k < slot.size(); ++k) u(slot[k]) = c(static_cast<Eigen::Index>(k));
     };
-    nominal_ex.add_commands = [traj, man](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) {
-      if (at.piece_mid > traj->t_end()) return;
-      const Eigen::VectorXd u = traj->control_at(at);
-      for (std::size_t k = 0; k < man.size(); ++k) c(man[k]) += u(static_cast<Eigen::Index>(k));
-    };
-    const Eigen::VectorXd& knots = traj->knot_times();
-    nominal_ex.add_breakpoints.assign(knots.data(), knots.data() + knots.size());
-    nominal_ex.add_end_time = maneuver->duration_s;
-    nominal = std::make_shared<ExtendedTrajectory>(traj, maneuver->duration_s);
+    maneuver->drive(nominal_ex);
+    nominal = maneuver->nominal();
     if (maneuver->duration_s > st.horizon_s)
       throw std::invalid_argument("controller.horizon_s = " + num(st.horizon_s) + " is shorter than the maneuver (" +
                                   num(maneuver->duration_s) + " s)");

@@ -67,6 +67,10 @@ struct ManeuverOutcome {
   std::shared_ptr<const CollocationTrajectory> trajectory;  ///< null if it failed
   std::vector<int> actuators;                               ///< element index of each command
   double duration_s = 0.0;
+  /// Adds the optimized commands to their actuators in `ex` (nothing after the maneuver).
+  void drive(Excitation& ex) const;
+  /// The optimized motion, continued at rest (its final rates) after it ends.
+  std::shared_ptr<const RigidTrajectory> nominal() const;
 };
 /// The [maneuver] study.
 ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary, bool quiet);
