@@ -352,8 +352,12 @@ void read_maneuver(Section& root, Design& d) {
     if (r->size() != nu) m.problem("rate_limits", m.key_path("rate_limits") + " needs one entry per actuator (" + std::to_string(nu) + ")");
     else p.du_max = Eigen::Map<const Eigen::VectorXd>(r->data(), static_cast<Eigen::Index>(r->size()));
   }
-  const std::string tr = m.choice("transcription", {"hermite_simpson", "trapezoidal"}, false).value_or("hermite_simpson");
-  o.transcription = tr == "trapezoidal" ? Transcription::Trapezoidal : Transcription::HermiteSimpson;
+  const std::string tr =
+      m.choice("transcription", {"hermite_simpson", "hermite_simpson_compressed", "trapezoidal"}, false)
+          .value_or("hermite_simpson");
+  o.transcription = tr == "trapezoidal"                  ? Transcription::Trapezoidal
+                    : tr == "hermite_simpson_compressed" ? Transcription::HermiteSimpsonCompressed
+                                                         : Transcription::HermiteSimpson;
   o.intervals = static_cast<int>(m.integer("intervals", 1, 100000, false).value_or(100));
   o.mesh_refinements = static_cast<int>(m.integer("mesh_refinements", 0, 20, false).value_or(0));
   o.mesh_tolerance = m.number("mesh_tolerance", Range::positive(), false).value_or(1e-6);

@@ -1,0 +1,113 @@
+#pragma once
+// Rigid maneuvers posed for trajectory optimization: what to move where, under which
+// actuator limits, at which cost; and how to transcribe and solve it. SI units and
+// radians throughout: commands in N (forces, thrusters) or N m (torques), times in s.
+//
+// The plant is the zero-order (rigid) model, docs/theory.md eq. 6.3, see
+// trajopt/rigid_dynamics.hpp. The cost is
+//   J = w_energy ∫ Σ_k W_k u_k² dt + w_time T + w_smooth ∫ Σ_k u_k'² dt
+// over t in [0, T], T fixed (duration_s) or free in [t_min_s, t_max_s].
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/dynamics/flexible_body.hpp"
+
+namespace freeflex {
+
+class CollocationTrajectory;
+
+struct ManeuverProblem {
+  using Vector6d = Eigen::Matrix<double, 6, 1>;
+  static constexpr double inf = std::numeric_limits<double>::infinity();
+
+  /// u_k commands element actuators[k] of the body (distinct indices).
+  std::vector<int> actuators;
+  /// Command bounds, one entry per actuator; ±infinity for none. u_min <= u_max.
+  Eigen::VectorXd u_min, u_max;
+  /// Optional rate bounds |u_k'| <= du_max(k) [N/s or N m/s], > 0 (infinity: none).
+  std::optional<Eigen::VectorXd> du_max;
+  /// Boundary states [Rx, Ry, θ, Rx', Ry', θ'] at t = 0 and t = T (rest to rest by default).
+  Vector6d x_initial = Vector6d::Zero();
+  Vector6d x_final = Vector6d::Zero();
+  /// Bounds on the state strictly between the ends (none by default).
+  Vector6d x_min = Vector6d::Constant(-inf);
+  Vector6d x_max = Vector6d::Constant(inf);
+
+  /// Fixed duration T = duration_s, or free T in [t_min_s, t_max_s] starting from
+  /// duration_s (clamped into the bounds) unless an initial guess brings its own.
+  bool free_time = false;
+  double duration_s = 1.0;
+  double t_min_s = 0.1;
+  double t_max_s = 10.0;
+
+  /// Objective weights (>= 0, at least one > 0; w_time needs free_time).
+  double w_energy = 1.0;
+  double w_time = 0.0;
+  double w_smooth = 0.0;
+  /// Diagonal W of the energy term, one entry >= 0 per actuator; empty means all ones.
+  Eigen::VectorXd energy_weights;
+};
+
+/// How the continuous problem becomes an NLP (see trajopt/collocation.hpp).
+enum class Transcription {
+  Trapezoidal,     ///< states at knots, controls piecewise linear; O(h²)
+  HermiteSimpson,  ///< separated form, states and controls at knots and midpoints; O(h⁴)
+  /// Same discretization and solution as HermiteSimpson, with the midpoint states
+  /// eliminated (x_c from the interpolation formula): a KKT system ~40% smaller.
+  HermiteSimpsonCompressed,
+};
+const char* to_string(Transcription t);
+/// True for the Hermite–Simpson forms (controls at interval midpoints too).
+inline bool has_midpoints(Transcription t) { return t != Transcription::Trapezoidal; }
+
+/// Where Ipopt starts. Priority: `solution`, then `control`, then the default (states
+/// linearly interpolated from x_initial to x_final, controls zero clipped to the bounds).
+struct InitialGuess {
+  /// A previous solution (any mesh, any transcription): states, controls and duration
+  /// are interpolated onto the new mesh.
+  std::shared_ptr<const CollocationTrajectory> solution;
+  /// A control history u(t) on [0, T] with nu entries, e.g. a pulse.
+  std::function<Eigen::VectorXd(double t_s)> control;
+  /// With `control`: states from a rollout of the dynamics under it (classical RK4, 8
+  /// steps per interval) instead of the straight line from x_initial to x_final.
+  bool rollout = false;
+};
+
+struct TrajoptOptions {
+  Transcription transcription = Transcription::HermiteSimpsonCompressed;
+  int intervals = 50;  ///< N >= 1, uniform mesh
+
+  /// Mesh refinement rounds after the first solve (0: off). Each round estimates the
+  /// local state error of every interval, e_k = max_i ∫_k |x_i' − f_i(x, u)| dt with the
+  /// transcription's interpolants (5-point Gauss–Legendre), halves every interval with
+  /// e_k > mesh_tolerance and re-solves warm-started from the interpolated solution.
+  /// It stops early when no interval is flagged or the mesh would exceed max_intervals.
+  int mesh_refinements = 0;
+  double mesh_tolerance = 1e-6;  ///< [state units: m, rad, m/s, rad/s]
+  int max_intervals = 5000;
+
+  bool verbose = false;  ///< Ipopt's log on stdout at print_level 5 (otherwise silent)
+  double tol = 1e-8;     ///< Ipopt tol
+  int max_iter = 3000;   ///< Ipopt max_iter
+  /// Ipopt derivative_test: "none", "first-order", "second-order" or "only-second-order".
+  /// Errors found are counted in TrajoptResult::derivative_test_errors.
+  std::string derivative_test = "none";
+  /// Any other Ipopt option, name and value as text; the value is read as the option's
+  /// registered type (integer, number or string). Unknown names or unparsable values throw.
+  std::vector<std::pair<std::string, std::string>> ipopt_options;
+  InitialGuess guess;
+  bool keep_log = false;  ///< copy Ipopt's log (print_level 5) into TrajoptResult::log
+};
+
+/// Throws std::invalid_argument listing every problem found (sizes, ranges, orderings).
+void validate(const FlexibleBody& body, const ManeuverProblem& problem);
+void validate(const TrajoptOptions& options);
+
+}  // namespace freeflex

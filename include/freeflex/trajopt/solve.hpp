@@ -1,0 +1,82 @@
+#pragma once
+// Optimal rigid maneuvers by direct collocation (trajopt/collocation.hpp) solved with
+// Ipopt: exact sparse Jacobian, exact sparse Hessian of the Lagrangian
+// (hessian_approximation exact), gradient-based NLP scaling (Ipopt's default), MUMPS
+// with its internal scaling off (mumps_scaling 0: robust to boundary conditions that
+// repeat what the dynamics fix, and faster), a 20% workspace margin (mumps_mem_percent
+// 20; Ipopt raises it on demand) and the AMF ordering (mumps_pivot_order 2: linear cost
+// in N). TrajoptOptions::ipopt_options override any of these. Mesh-refinement rounds start at mu_init 1e-6 from the interpolated solution.
+//
+//   TrajoptResult r = solve_maneuver(body, problem, options);
+//   if (r.success()) r.trajectory->at(Instant::at(t));  // a RigidTrajectory
+//
+// Bad input (see validate() in trajopt/problem.hpp) throws std::invalid_argument before
+// any work; a numerical outcome (infeasible, iteration limit, ...) is a result with a
+// status and a message, never an exception.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/trajopt/problem.hpp"
+#include "freeflex/trajopt/trajectory.hpp"
+
+namespace freeflex {
+
+enum class TrajoptStatus {
+  Solved,            ///< Ipopt Solve_Succeeded
+  SolvedAcceptable,  ///< Ipopt Solved_To_Acceptable_Level
+  Infeasible,        ///< Ipopt Infeasible_Problem_Detected: converged to a point of local infeasibility
+  MaxIterations,     ///< Ipopt Maximum_Iterations_Exceeded (or CPU time)
+  Failed,            ///< anything else (restoration failure, too small steps, evaluation error, ...)
+};
+const char* to_string(TrajoptStatus s);
+
+/// One solve on one mesh (mesh refinement makes several).
+struct MeshRound {
+  int intervals = 0;
+  int iterations = 0;
+  double objective = 0.0;
+  double max_defect = 0.0;
+  double max_error_estimate = 0.0;  ///< max over intervals of CollocationTrajectory::interval_errors
+};
+
+struct TrajoptResult {
+  TrajoptStatus status = TrajoptStatus::Failed;
+  /// Solved or SolvedAcceptable: the arrays below are an optimum of the last NLP.
+  bool success() const { return status == TrajoptStatus::Solved || status == TrajoptStatus::SolvedAcceptable; }
+  std::string message;  ///< Ipopt's status in words, with "not a solution" when !success()
+
+  double objective = 0.0;    ///< J at the returned point
+  int iterations = 0;        ///< Ipopt iterations, summed over mesh rounds
+  double solve_time_s = 0.0; ///< wall time of the whole call
+  double duration_s = 0.0;   ///< T
+  double max_defect = 0.0;   ///< max |collocation defect| at the returned point (HS: incl. midpoint rows)
+  double max_error_estimate = 0.0;  ///< max interval error estimate of the returned trajectory
+  Transcription transcription = Transcription::HermiteSimpsonCompressed;
+  int intervals = 0;                ///< N of the final mesh
+  std::vector<MeshRound> rounds;    ///< first solve, then each refinement
+
+  Eigen::VectorXd t;      ///< N+1 knot times [s]
+  Eigen::MatrixXd x;      ///< (N+1) x 6 knot states
+  Eigen::MatrixXd u;      ///< (N+1) x nu knot controls
+  Eigen::VectorXd t_mid;  ///< Hermite–Simpson only: N midpoint times, states, controls
+  Eigen::MatrixXd x_mid;
+  Eigen::MatrixXd u_mid;
+
+  /// The continuous trajectory the solution stands for (also for a failed solve: the
+  /// last iterate). Null only if Ipopt returned no point at all.
+  std::shared_ptr<const CollocationTrajectory> trajectory;
+  /// u(t) of `trajectory` (zero outside [0, T]); zeros if there is no trajectory.
+  Eigen::VectorXd control_at(double t_s) const;
+
+  /// With options.derivative_test != "none": errors Ipopt's derivative checker reported
+  /// (0 when it printed "No errors detected"); -1 when the checker did not run.
+  int derivative_test_errors = -1;
+  std::string log;  ///< Ipopt's output when options.keep_log or derivative_test is set
+};
+
+TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& problem, const TrajoptOptions& options);
+
+}  // namespace freeflex

@@ -1,0 +1,445 @@
+// Ipopt 3.11 behind solve_maneuver: a TNLP that forwards to CollocationNlp, option
+// handling, status mapping, and the mesh-refinement loop. Ipopt headers stay here.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <coin/IpIpoptApplication.hpp>
+#include <coin/IpSolveStatistics.hpp>
+#include <coin/IpTNLP.hpp>
+
+#include "freeflex/trajopt/collocation.hpp"
+#include "freeflex/trajopt/solve.hpp"
+
+namespace freeflex {
+
+namespace {
+
+using Ipopt::Index;
+using Ipopt::Number;
+
+/// Collects Ipopt's output in a string (the derivative checker's verdict is read from it).
+class StringJournal : public Ipopt::Journal {
+ public:
+  StringJournal(Ipopt::EJournalLevel level, std::string* out) : Ipopt::Journal("freeflex-log", level), out_(out) {}
+
+ protected:
+  void PrintImpl(Ipopt::EJournalCategory, Ipopt::EJournalLevel, const char* str) override { out_->append(str); }
+  void PrintfImpl(Ipopt::EJournalCategory, Ipopt::EJournalLevel, const char* fmt, va_list ap) override {
+    va_list copy;
+    va_copy(copy, ap);
+    char buf[1024];
+    const int len = std::vsnprintf(buf, sizeof buf, fmt, ap);
+    if (len >= 0 && static_cast<std::size_t>(len) < sizeof buf) {
+      out_->append(buf, static_cast<std::size_t>(len));
+    } else if (len >= 0) {
+      std::string big(static_cast<std::size_t>(len) + 1, '\0');
+      std::vsnprintf(&big[0], big.size(), fmt, copy);
+      big.resize(static_cast<std::size_t>(len));
+      out_->append(big);
+    }
+    va_end(copy);
+  }
+  void FlushBufferImpl() override {}
+
+ private:
+  std::string* out_;
+};
+
+/// The TNLP. Every callback catches everything: no exception crosses into Ipopt; the
+/// first message is kept and reported in the result.
+class CollocationTnlp : public Ipopt::TNLP {
+ public:
+  CollocationTnlp(const CollocationNlp& nlp, Eigen::VectorXd w0) : nlp_(nlp), w0_(std::move(w0)) {}
+
+  Eigen::VectorXd w_final;
+  double obj_final = std::numeric_limits<double>::quiet_NaN();
+  bool finalized = false;
+  std::string error;
+
+  bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& index_style) override {
+    n = nlp_.num_variables();
+    m = nlp_.num_constraints();
+    nnz_jac_g = nlp_.jacobian_nonzeros();
+    nnz_h_lag = nlp_.hessian_nonzeros();
+    index_style = C_STYLE;
+    return true;
+  }
+
+  bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l, Number* g_u) override {
+    return guard([&] {
+      Eigen::Map<Eigen::VectorXd> xl(x_l, n), xu(x_u, n), gl(g_l, m), gu(g_u, m);
+      nlp_.bounds(xl, xu, gl, gu);
+      // Ipopt reads |bound| >= 1e19 as no bound.
+      const double big = 1e20;
+      xl = xl.cwiseMax(-big);
+      xu = xu.cwiseMin(big);
+      gl = gl.cwiseMax(-big);
+      gu = gu.cwiseMin(big);
+    });
+  }
+
+  bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_L, Number* z_U, Index m,
+                          bool init_lambda, Number* lambda) override {
+    if (init_x) std::copy(w0_.data(), w0_.data() + n, x);
+    // Only asked for with warm_start_init_point = yes: no multipliers are known.
+    if (init_z) {
+      std::fill(z_L, z_L + n, 0.0);
+      std::fill(z_U, z_U + n, 0.0);
+    }
+    if (init_lambda) std::fill(lambda, lambda + m, 0.0);
+    return true;
+  }
+
+  bool eval_f(Index n, const Number* x, bool, Number& obj_value) override {
+    return guard([&] { obj_value = nlp_.objective(Eigen::Map<const Eigen::VectorXd>(x, n)); });
+  }
+
+  bool eval_grad_f(Index n, const Number* x, bool, Number* grad_f) override {
+    return guard([&] {
+      Eigen::Map<Eigen::VectorXd> g(grad_f, n);
+      nlp_.objective_gradient(Eigen::Map<const Eigen::VectorXd>(x, n), g);
+    });
+  }
+
+  bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
+    return guard([&] {
+      Eigen::Map<Eigen::VectorXd> gv(g, m);
+      nlp_.constraints(Eigen::Map<const Eigen::VectorXd>(x, n), gv);
+    });
+  }
+
+  bool eval_jac_g(Index n, const Number* x, bool, Index, Index nele_jac, Index* iRow, Index* jCol,
+                  Number* values) override {
+    return guard([&] {
+      if (!values) {
+        std::copy(nlp_.jacobian_rows().begin(), nlp_.jacobian_rows().end(), iRow);
+        std::copy(nlp_.jacobian_cols().begin(), nlp_.jacobian_cols().end(), jCol);
+        return;
+      }
+      Eigen::Map<Eigen::VectorXd> v(values, nele_jac);
+      nlp_.jacobian_values(Eigen::Map<const Eigen::VectorXd>(x, n), v);
+    });
+  }
+
+  bool eval_h(Index n, const Number* x, bool, Number obj_factor, Index m, const Number* lambda, bool,
+              Index nele_hess, Index* iRow, Index* jCol, Number* values) override {
+    return guard([&] {
+      if (!values) {
+        std::copy(nlp_.hessian_rows().begin(), nlp_.hessian_rows().end(), iRow);
+        std::copy(nlp_.hessian_cols().begin(), nlp_.hessian_cols().end(), jCol);
+        return;
+      }
+      Eigen::Map<Eigen::VectorXd> v(values, nele_hess);
+      nlp_.hessian_values(Eigen::Map<const Eigen::VectorXd>(x, n), obj_factor,
+                          Eigen::Map<const Eigen::VectorXd>(lambda, m), v);
+    });
+  }
+
+  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index,
+                         const Number*, const Number*, Number obj_value, const Ipopt::IpoptData*,
+                         Ipopt::IpoptCalculatedQuantities*) override {
+    try {
+      if (x) w_final = Eigen::Map<const Eigen::VectorXd>(x, n);
+      obj_final = obj_value;
+      finalized = true;
+    } catch (const std::exception& e) {
+      if (error.empty()) error = e.what();
+    } catch (...) {
+      if (error.empty()) error = "unknown exception in finalize_solution";
+    }
+  }
+
+ private:
+  template <class F>
+  bool guard(F&& f) {
+    try {
+      f();
+      return true;
+    } catch (const std::exception& e) {
+      if (error.empty()) error = e.what();
+    } catch (...) {
+      if (error.empty()) error = "unknown exception in an Ipopt callback";
+    }
+    return false;
+  }
+
+  const CollocationNlp& nlp_;
+  Eigen::VectorXd w0_;
+};
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  const auto e = s.find_last_not_of(" \t");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+/// Sets one user option by its registered type; throws std::invalid_argument naming it.
+void set_user_option(Ipopt::IpoptApplication& app, const std::string& name, const std::string& raw) {
+  const std::string value = trim(raw);
+  Ipopt::SmartPtr<const Ipopt::RegisteredOption> reg = app.RegOptions()->GetOption(name);
+  const std::string where = "trajopt options: ipopt option '" + name + "' = '" + raw + "'";
+  if (Ipopt::IsNull(reg)) throw std::invalid_argument(where + ": unknown to Ipopt");
+  bool ok = false;
+  char* end = nullptr;
+  switch (reg->Type()) {
+    case Ipopt::OT_Integer: {
+      const long v = std::strtol(value.c_str(), &end, 10);
+      if (value.empty() || *end != '\0') throw std::invalid_argument(where + ", expected an integer");
+      ok = reg->IsValidIntegerSetting(static_cast<Index>(v)) &&
+           app.Options()->SetIntegerValue(name, static_cast<Index>(v));
+      break;
+    }
+    case Ipopt::OT_Number: {
+      const double v = std::strtod(value.c_str(), &end);
+      if (value.empty() || *end != '\0') throw std::invalid_argument(where + ", expected a number");
+      ok = reg->IsValidNumberSetting(v) && app.Options()->SetNumericValue(name, v);
+      break;
+    }
+    default:
+      ok = reg->IsValidStringSetting(value) && app.Options()->SetStringValue(name, value);
+  }
+  if (!ok) throw std::invalid_argument(where + ": value rejected by Ipopt (out of range or not a valid choice)");
+}
+
+struct IpoptRun {
+  Ipopt::ApplicationReturnStatus status = Ipopt::Internal_Error;
+  Eigen::VectorXd w;
+  double objective = std::numeric_limits<double>::quiet_NaN();
+  int iterations = 0;
+  std::string error, log;
+};
+
+IpoptRun run_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const TrajoptOptions& o, bool check_derivatives,
+                   bool warm) {
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
+  Ipopt::OptionsList& opts = *app->Options();
+  opts.SetStringValue("sb", "yes");  // no banner
+  opts.SetIntegerValue("print_level", o.verbose ? 5 : 0);
+  opts.SetNumericValue("tol", o.tol);
+  opts.SetIntegerValue("max_iter", o.max_iter);
+  opts.SetStringValue("hessian_approximation", "exact");
+  opts.SetStringValue("nlp_scaling_method", "gradient-based");
+  opts.SetStringValue("derivative_test", check_derivatives ? o.derivative_test : "none");
+  opts.SetStringValue("derivative_test_print_all", "no");
+  // MUMPS' own row/column scaling misjudges the KKT matrix as singular when boundary
+  // conditions repeat what the dynamics already fix (e.g. R at rest at both ends when no
+  // actuator can push o): Ipopt then fails in its first step. Without it the
+  // regularization copes, and each factorization is ~15% cheaper. Ipopt's
+  // gradient-based NLP scaling stays on.
+  opts.SetIntegerValue("mumps_scaling", 0);
+  // Ipopt's default asks MUMPS for 10x its workspace estimate, and every factorization
+  // then pays for touching it (cost superlinear in N beyond ~400 intervals). Ipopt
+  // raises the value itself if MUMPS runs short.
+  opts.SetIntegerValue("mumps_mem_percent", 20);
+  // Approximate minimum fill keeps the factorization linear in N on these block-banded
+  // KKT systems; MUMPS' automatic choice switches to an ordering that is ~30% slower
+  // above ~10k unknowns (N ~ 800).
+  opts.SetIntegerValue("mumps_pivot_order", 2);
+  if (warm) opts.SetNumericValue("mu_init", 1e-6);  // start close to the central path of a near-optimal point
+  for (const auto& kv : o.ipopt_options) set_user_option(*app, kv.first, kv.second);
+
+  IpoptRun run;
+  const Ipopt::ApplicationReturnStatus init = app->Initialize("");  // "": no ipopt.opt from the working directory
+  if (init != Ipopt::Solve_Succeeded) {
+    run.status = init;
+    run.error = "Ipopt initialization failed";
+    return run;
+  }
+  const bool capture = o.keep_log || (check_derivatives && o.derivative_test != "none");
+  if (capture) {
+    Ipopt::SmartPtr<Ipopt::Journal> j = new StringJournal(Ipopt::J_ITERSUMMARY, &run.log);
+    app->Jnlst()->AddJournal(j);
+  }
+  Ipopt::SmartPtr<CollocationTnlp> tnlp = new CollocationTnlp(nlp, w0);
+  try {
+    run.status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
+  } catch (const std::exception& e) {  // Ipopt catches its own; this is a last resort
+    run.status = Ipopt::NonIpopt_Exception_Thrown;
+    run.error = e.what();
+  }
+  if (Ipopt::IsValid(app->Statistics())) run.iterations = app->Statistics()->IterationCount();
+  if (tnlp->finalized) {
+    run.w = tnlp->w_final;
+    run.objective = tnlp->obj_final;
+  }
+  if (run.error.empty()) run.error = tnlp->error;
+  return run;
+}
+
+const char* ipopt_status_name(Ipopt::ApplicationReturnStatus s) {
+  switch (s) {
+    case Ipopt::Solve_Succeeded: return "Solve_Succeeded";
+    case Ipopt::Solved_To_Acceptable_Level: return "Solved_To_Acceptable_Level";
+    case Ipopt::Infeasible_Problem_Detected: return "Infeasible_Problem_Detected";
+    case Ipopt::Search_Direction_Becomes_Too_Small: return "Search_Direction_Becomes_Too_Small";
+    case Ipopt::Diverging_Iterates: return "Diverging_Iterates";
+    case Ipopt::User_Requested_Stop: return "User_Requested_Stop";
+    case Ipopt::Feasible_Point_Found: return "Feasible_Point_Found";
+    case Ipopt::Maximum_Iterations_Exceeded: return "Maximum_Iterations_Exceeded";
+    case Ipopt::Restoration_Failed: return "Restoration_Failed";
+    case Ipopt::Error_In_Step_Computation: return "Error_In_Step_Computation";
+    case Ipopt::Maximum_CpuTime_Exceeded: return "Maximum_CpuTime_Exceeded";
+    case Ipopt::Not_Enough_Degrees_Of_Freedom: return "Not_Enough_Degrees_Of_Freedom";
+    case Ipopt::Invalid_Problem_Definition: return "Invalid_Problem_Definition";
+    case Ipopt::Invalid_Option: return "Invalid_Option";
+    case Ipopt::Invalid_Number_Detected: return "Invalid_Number_Detected";
+    case Ipopt::Unrecoverable_Exception: return "Unrecoverable_Exception";
+    case Ipopt::NonIpopt_Exception_Thrown: return "NonIpopt_Exception_Thrown";
+    case Ipopt::Insufficient_Memory: return "Insufficient_Memory";
+    default: return "Internal_Error";
+  }
+}
+
+TrajoptStatus map_status(Ipopt::ApplicationReturnStatus s) {
+  switch (s) {
+    case Ipopt::Solve_Succeeded: return TrajoptStatus::Solved;
+    case Ipopt::Solved_To_Acceptable_Level: return TrajoptStatus::SolvedAcceptable;
+    case Ipopt::Infeasible_Problem_Detected: return TrajoptStatus::Infeasible;
+    case Ipopt::Maximum_Iterations_Exceeded:
+    case Ipopt::Maximum_CpuTime_Exceeded: return TrajoptStatus::MaxIterations;
+    default: return TrajoptStatus::Failed;
+  }
+}
+
+std::string describe(Ipopt::ApplicationReturnStatus s, const std::string& error) {
+  std::string msg = std::string("Ipopt ") + ipopt_status_name(s) + ": ";
+  switch (map_status(s)) {
+    case TrajoptStatus::Solved: msg += "optimal solution found"; break;
+    case TrajoptStatus::SolvedAcceptable: msg += "solved to the acceptable tolerances only"; break;
+    case TrajoptStatus::Infeasible:
+      msg += "converged to a point of local infeasibility, the maneuver looks unreachable; not a solution";
+      break;
+    case TrajoptStatus::MaxIterations: msg += "iteration or time limit reached; not a solution"; break;
+    case TrajoptStatus::Failed: msg += "the solver stopped; not a solution"; break;
+  }
+  if (!error.empty()) msg += " (evaluation error: " + error + ")";
+  return msg;
+}
+
+/// Errors reported by Ipopt's derivative checker in its log; -1 if it printed no verdict.
+int derivative_errors(const std::string& log) {
+  int total = -1;
+  std::size_t pos = 0;
+  const std::string ok = "No errors detected by derivative checker.";
+  const std::string bad = "Derivative checker detected ";
+  while (true) {
+    const std::size_t a = log.find(ok, pos), b = log.find(bad, pos);
+    if (a == std::string::npos && b == std::string::npos) break;
+    if (total < 0) total = 0;
+    if (b == std::string::npos || (a != std::string::npos && a < b)) {
+      pos = a + ok.size();
+    } else {
+      total += std::atoi(log.c_str() + b + bad.size());
+      pos = b + bad.size();
+    }
+  }
+  return total;
+}
+
+/// Halves every interval whose error estimate exceeds tol.
+std::vector<double> refine(const std::vector<double>& sigma, const Eigen::VectorXd& err, double tol) {
+  std::vector<double> out;
+  for (std::size_t k = 0; k < sigma.size(); ++k) {
+    if (err(static_cast<Eigen::Index>(k)) > tol) {
+      out.push_back(0.5 * sigma[k]);
+      out.push_back(0.5 * sigma[k]);
+    } else {
+      out.push_back(sigma[k]);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* to_string(TrajoptStatus s) {
+  switch (s) {
+    case TrajoptStatus::Solved: return "solved";
+    case TrajoptStatus::SolvedAcceptable: return "solved-acceptable";
+    case TrajoptStatus::Infeasible: return "infeasible";
+    case TrajoptStatus::MaxIterations: return "max-iterations";
+    default: return "failed";
+  }
+}
+
+Eigen::VectorXd TrajoptResult::control_at(double t_s) const {
+  if (!trajectory) return Eigen::VectorXd::Zero(u.cols());
+  return trajectory->control_at(t_s);
+}
+
+TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& problem, const TrajoptOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(body, problem);
+  validate(options);
+
+  TrajoptResult res;
+  res.transcription = options.transcription;
+  std::vector<double> mesh(static_cast<std::size_t>(options.intervals), 1.0 / options.intervals);
+  InitialGuess guess = options.guess;
+  for (int round = 0;; ++round) {
+    const CollocationNlp nlp(body, problem, options.transcription, mesh);
+    const Eigen::VectorXd w0 = initial_point(nlp, guess);
+    IpoptRun run = run_ipopt(nlp, w0, options, round == 0, round > 0);
+    if (round == 0 && options.derivative_test != "none") res.derivative_test_errors = derivative_errors(run.log);
+    res.log += run.log;
+    res.status = map_status(run.status);
+    res.message = describe(run.status, run.error);
+    res.iterations += run.iterations;
+    res.intervals = nlp.intervals();
+    MeshRound mr;
+    mr.intervals = nlp.intervals();
+    mr.iterations = run.iterations;
+    if (run.w.size() == nlp.num_variables()) {
+      const Eigen::VectorXd& w = run.w;
+      res.objective = nlp.objective(w);
+      res.duration_s = nlp.duration(w);
+      res.max_defect = nlp.max_defect(w);
+      res.trajectory = nlp.trajectory(w);
+      res.max_error_estimate = res.trajectory->interval_errors().maxCoeff();
+      res.t = res.trajectory->knot_times();
+      res.x = res.trajectory->knot_states();
+      res.u = res.trajectory->knot_controls();
+      const int N = nlp.intervals(), nu = nlp.dynamics().nu();
+      if (has_midpoints(options.transcription)) {
+        nlp.midpoints(w, res.x_mid, res.u_mid);
+        res.t_mid.resize(N);
+        for (int k = 0; k < N; ++k) res.t_mid(k) = nlp.mid_fraction(k) * res.duration_s;
+      } else {
+        res.t_mid.resize(0);
+        res.x_mid.resize(0, 6);
+        res.u_mid.resize(0, nu);
+      }
+      mr.objective = res.objective;
+      mr.max_defect = res.max_defect;
+      mr.max_error_estimate = res.max_error_estimate;
+    } else {
+      res.trajectory.reset();
+    }
+    res.rounds.push_back(mr);
+
+    if (!res.success() || !res.trajectory || round >= options.mesh_refinements) break;
+    const Eigen::VectorXd err = res.trajectory->interval_errors();
+    if (err.maxCoeff() <= options.mesh_tolerance) break;
+    std::vector<double> finer = refine(nlp.mesh_fractions(), err, options.mesh_tolerance);
+    if (static_cast<int>(finer.size()) > options.max_intervals) {
+      res.message += "; mesh refinement stopped: " + std::to_string(finer.size()) + " intervals would exceed max_intervals = " +
+                     std::to_string(options.max_intervals);
+      break;
+    }
+    mesh = std::move(finer);
+    guess = InitialGuess{};
+    guess.solution = res.trajectory;
+  }
+  res.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return res;
+}
+
+}  // namespace freeflex

@@ -1,0 +1,233 @@
+// The collocation NLP (trajopt/collocation.hpp): its gradient, constraint Jacobian and
+// Hessian of the Lagrangian against central differences at random points, for every
+// transcription, objective, fixed and free duration and rate bounds; then Ipopt's own
+// derivative checker on the same NLPs; then the bad-input messages.
+#include <catch2/catch.hpp>
+
+#include <random>
+#include <set>
+#include <tuple>
+
+#include "freeflex/trajopt/collocation.hpp"
+#include "freeflex/trajopt/solve.hpp"
+
+using namespace freeflex;
+using Catch::Matchers::Contains;
+
+namespace {
+
+FlexibleBody rich_body() {
+  BeamProperties p;
+  p.segments = {{0.6, 1.2, 2.0}, {0.5, 0.7, 1.1}};
+  p.reference_m = 0.3;  // S_o != 0
+  p.hub_mass_kg = 0.3;
+  p.point_masses = {{1.1, 0.25}};
+  std::vector<ForceElement> el;
+  el.push_back({"force", ForceElement::Type::Force, 0.9, {0.3, -0.8}, false});
+  el.push_back({"thruster", ForceElement::Type::Thruster, 0.1, {-0.5, 0.4}, true});
+  el.push_back({"torque", ForceElement::Type::Torque, 0.7, {0.0, 0.0}, false});
+  return FlexibleBody(Beam(p), 2, el);
+}
+
+ManeuverProblem rich_problem(bool free_time, double w_energy, double w_time, double w_smooth, bool rates) {
+  ManeuverProblem p;
+  p.actuators = {0, 1, 2};
+  p.u_min = Eigen::Vector3d(-2.0, -1.0, -0.5);
+  p.u_max = Eigen::Vector3d(2.0, 1.5, 0.5);
+  if (rates) p.du_max = Eigen::Vector3d(5.0, ManeuverProblem::inf, 3.0);
+  p.x_final << 0.3, -0.2, 1.0, 0.0, 0.0, 0.0;
+  p.free_time = free_time;
+  p.duration_s = 1.7;
+  p.t_min_s = 0.5;
+  p.t_max_s = 4.0;
+  p.w_energy = w_energy;
+  p.w_time = w_time;
+  p.w_smooth = w_smooth;
+  p.energy_weights = Eigen::Vector3d(1.0, 0.5, 2.0);
+  return p;
+}
+
+Eigen::MatrixXd dense_jacobian(const CollocationNlp& nlp, const Eigen::VectorXd& w) {
+  Eigen::VectorXd v(nlp.jacobian_nonzeros());
+  nlp.jacobian_values(w, v);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(nlp.num_constraints(), nlp.num_variables());
+  for (int i = 0; i < v.size(); ++i) J(nlp.jacobian_rows()[i], nlp.jacobian_cols()[i]) += v(i);
+  return J;
+}
+
+Eigen::VectorXd lagrangian_gradient(const CollocationNlp& nlp, const Eigen::VectorXd& w, double sigma,
+                                    const Eigen::VectorXd& lam) {
+  Eigen::VectorXd g(nlp.num_variables());
+  nlp.objective_gradient(w, g);
+  return sigma * g + dense_jacobian(nlp, w).transpose() * lam;
+}
+
+}  // namespace
+
+TEST_CASE("collocation NLP derivatives match central differences", "[trajopt]") {
+  const FlexibleBody body = rich_body();
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  // (free time, w_energy, w_time, w_smooth, rate bounds)
+  const std::vector<std::tuple<bool, double, double, double, bool>> cases = {
+      {false, 1.0, 0.0, 0.0, false}, {false, 0.0, 0.0, 1.0, true}, {true, 1.0, 0.0, 0.0, false},
+      {true, 0.0, 1.0, 0.0, true},   {true, 0.7, 0.3, 0.2, true}};
+  for (Transcription tr :
+       {Transcription::Trapezoidal, Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed})
+    for (const auto& c : cases) {
+      const ManeuverProblem p =
+          rich_problem(std::get<0>(c), std::get<1>(c), std::get<2>(c), std::get<3>(c), std::get<4>(c));
+      // a non-uniform mesh exercises the per-interval h_k
+      const CollocationNlp nlp(body, p, tr, std::vector<double>{0.2, 0.5, 0.3});
+      const int n = nlp.num_variables(), m = nlp.num_constraints();
+      INFO(to_string(tr) << " free " << std::get<0>(c) << " we " << std::get<1>(c) << " wt " << std::get<2>(c)
+                         << " ws " << std::get<3>(c) << " rates " << std::get<4>(c));
+      Eigen::VectorXd w(n), lam(m);
+      for (int i = 0; i < n; ++i) w(i) = U(rng);
+      for (int i = 0; i < m; ++i) lam(i) = U(rng);
+      if (nlp.free_time()) w(nlp.time_index()) = 1.3;
+      const double sigma = 0.8;
+
+      // Structure: no duplicates, Hessian entries in the lower triangle.
+      std::set<std::pair<int, int>> seen_j, seen_h;
+      for (int i = 0; i < nlp.jacobian_nonzeros(); ++i)
+        CHECK(seen_j.insert({nlp.jacobian_rows()[i], nlp.jacobian_cols()[i]}).second);
+      for (int i = 0; i < nlp.hessian_nonzeros(); ++i) {
+        CHECK(nlp.hessian_rows()[i] >= nlp.hessian_cols()[i]);
+        CHECK(seen_h.insert({nlp.hessian_rows()[i], nlp.hessian_cols()[i]}).second);
+      }
+
+      const double h = 1e-6;  // truncation ~h^2 ~1e-12, round-off ~1e-16/h ~1e-10 (entries O(1..10))
+      Eigen::VectorXd grad(n), g(m), gp(m), gm(m);
+      nlp.objective_gradient(w, grad);
+      const Eigen::MatrixXd J = dense_jacobian(nlp, w);
+      Eigen::MatrixXd Jfd(m, n), Hfd(n, n);
+      Eigen::VectorXd gradfd(n);
+      for (int i = 0; i < n; ++i) {
+        Eigen::VectorXd wp = w, wm = w;
+        wp(i) += h;
+        wm(i) -= h;
+        gradfd(i) = (nlp.objective(wp) - nlp.objective(wm)) / (2 * h);
+        nlp.constraints(wp, gp);
+        nlp.constraints(wm, gm);
+        Jfd.col(i) = (gp - gm) / (2 * h);
+        Hfd.col(i) = (lagrangian_gradient(nlp, wp, sigma, lam) - lagrangian_gradient(nlp, wm, sigma, lam)) / (2 * h);
+      }
+      CHECK((grad - gradfd).cwiseAbs().maxCoeff() < 1e-7);  // see h
+      CHECK((J - Jfd).cwiseAbs().maxCoeff() < 1e-7);        // also: FD is zero wherever the pattern has no entry
+
+      Eigen::VectorXd hv(nlp.hessian_nonzeros());
+      nlp.hessian_values(w, sigma, lam, hv);
+      Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+      for (int i = 0; i < hv.size(); ++i) {
+        const int r = nlp.hessian_rows()[i], cc = nlp.hessian_cols()[i];
+        H(r, cc) += hv(i);
+        if (r != cc) H(cc, r) += hv(i);
+      }
+      CHECK((H - Hfd).cwiseAbs().maxCoeff() < 1e-6);  // differences of analytic gradients, entries up to ~1e2
+    }
+}
+
+TEST_CASE("Ipopt's derivative checker finds no error in the collocation NLP", "[trajopt]") {
+  const FlexibleBody body = rich_body();
+  // (free time, w_energy, w_time, w_smooth, rates): energy, time and smoothness objectives
+  const std::vector<std::tuple<bool, double, double, double, bool>> cases = {
+      {false, 1.0, 0.0, 0.0, false}, {true, 1.0, 0.0, 0.0, false}, {true, 0.0, 1.0, 0.0, true},
+      {false, 0.0, 0.0, 1.0, true},  {true, 0.0, 0.1, 1.0, true}};
+  for (Transcription tr :
+       {Transcription::Trapezoidal, Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed})
+    for (const auto& c : cases) {
+      const ManeuverProblem p =
+          rich_problem(std::get<0>(c), std::get<1>(c), std::get<2>(c), std::get<3>(c), std::get<4>(c));
+      TrajoptOptions o;
+      o.transcription = tr;
+      o.intervals = 4;
+      o.derivative_test = "second-order";
+      o.max_iter = 0;  // only the check
+      // Ipopt checks at a random perturbation of this start (point_perturbation_radius);
+      // non-zero controls make every second-derivative term active.
+      o.guess.control = [](double t) { return Eigen::Vector3d(std::sin(3 * t), 0.5 * std::cos(2 * t), 0.3); };
+      const TrajoptResult r = solve_maneuver(body, p, o);
+      INFO(to_string(tr) << " objective weights " << std::get<1>(c) << " " << std::get<2>(c) << " "
+                         << std::get<3>(c) << "\n"
+                         << r.log);
+      // The log holds the verdict once: "No errors detected" or "detected N error(s)".
+      CHECK(r.log.find("Starting derivative checker for second derivatives") != std::string::npos);
+      CHECK(r.derivative_test_errors == 0);
+    }
+}
+
+TEST_CASE("the derivative-checker verdict is read from Ipopt's log", "[trajopt]") {
+  // A tolerance below finite-difference noise makes Ipopt flag correct derivatives: the
+  // count must then be positive, so the zero above is a real verdict.
+  const FlexibleBody body = rich_body();
+  TrajoptOptions o;
+  o.intervals = 3;
+  o.derivative_test = "second-order";
+  o.max_iter = 0;
+  o.guess.control = [](double t) { return Eigen::Vector3d(std::sin(3 * t), 0.5 * std::cos(2 * t), 0.3); };
+  o.ipopt_options = {{"derivative_test_tol", "1e-14"}};
+  const TrajoptResult r = solve_maneuver(body, rich_problem(true, 1.0, 0.5, 0.0, false), o);
+  CHECK(r.derivative_test_errors > 0);
+  CHECK(r.log.find("Derivative checker detected") != std::string::npos);
+  o.derivative_test = "none";
+  CHECK(solve_maneuver(body, rich_problem(true, 1.0, 0.5, 0.0, false), o).derivative_test_errors == -1);
+}
+
+TEST_CASE("bad maneuver input throws with the field, the expectation and the value", "[trajopt]") {
+  const FlexibleBody body = rich_body();
+  const ManeuverProblem good = rich_problem(false, 1.0, 0.0, 0.0, false);
+  TrajoptOptions o;
+  o.intervals = 5;
+
+  TrajoptOptions bad_n = o;
+  bad_n.intervals = 0;
+  CHECK_THROWS_WITH(solve_maneuver(body, good, bad_n), Contains("intervals = 0, expected >= 1"));
+
+  ManeuverProblem p = good;
+  p.u_min(1) = 3.0;
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o), Contains("u_min[1] = 3, u_max[1] = 1.5, expected u_min <= u_max"));
+
+  p = good;
+  p.actuators = {0, 7, 2};
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o),
+                    Contains("actuators[1] = 7, expected an element index in [0, 2]"));
+
+  p = good;
+  p.duration_s = 0.0;
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o), Contains("duration_s = 0, expected a finite value > 0"));
+  p.duration_s = -1.0;
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o), Contains("duration_s = -1"));
+
+  p = good;
+  p.free_time = true;
+  p.t_min_s = 5.0;
+  p.t_max_s = 2.0;
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o), Contains("t_min_s = 5 > t_max_s = 2, expected t_min_s <= t_max_s"));
+
+  p = good;
+  p.u_max.resize(2);
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o), Contains("u_max has 2 entries, expected 3"));
+
+  p = good;
+  p.w_time = 1.0;
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o), Contains("expected free_time = true"));
+
+  // Several problems are reported at once.
+  p = good;
+  p.duration_s = -2.0;
+  p.u_min(0) = 9.0;
+  CHECK_THROWS_WITH(solve_maneuver(body, p, o), Contains("duration_s = -2") && Contains("u_min[0] = 9"));
+
+  TrajoptOptions bad_opt = o;
+  bad_opt.ipopt_options = {{"no_such_option", "1"}};
+  CHECK_THROWS_WITH(solve_maneuver(body, good, bad_opt), Contains("'no_such_option'") && Contains("unknown to Ipopt"));
+  bad_opt.ipopt_options = {{"max_cpu_time", "fast"}};
+  CHECK_THROWS_WITH(solve_maneuver(body, good, bad_opt), Contains("expected a number"));
+  bad_opt.ipopt_options = {{"mu_strategy", "sideways"}};
+  CHECK_THROWS_WITH(solve_maneuver(body, good, bad_opt), Contains("rejected by Ipopt"));
+
+  TrajoptOptions bad_guess = o;
+  bad_guess.guess.control = [](double) { return Eigen::VectorXd::Zero(2); };
+  CHECK_THROWS_WITH(solve_maneuver(body, good, bad_guess), Contains("has 2 entries, expected 3"));
+}

@@ -1,0 +1,349 @@
+// Optimal maneuvers against known answers: closed forms for a torque on a rigid beam,
+// the convergence order of the trapezoidal rule, a nonlinear two-thruster slew replayed
+// open loop through the zero-order simulator, minimum time, an unreachable target, mesh
+// refinement and warm starts.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "freeflex/sim/integrator.hpp"
+#include "freeflex/trajopt/solve.hpp"
+
+using namespace freeflex;
+
+namespace {
+
+const double kPi = std::acos(-1.0);
+
+/// The paper's beam (1 m, 1 kg, EI 1, o at the centre: I_o = 1/12) with a torque at o.
+FlexibleBody torque_body() {
+  return FlexibleBody(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), 2,
+                      {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}});
+}
+
+/// Rest to rest rotation by dtheta in T with an unbounded torque, minimum ∫τ² dt.
+ManeuverProblem rotation(double dtheta, double T) {
+  ManeuverProblem p;
+  p.actuators = {0};
+  p.u_min = Eigen::VectorXd::Constant(1, -ManeuverProblem::inf);
+  p.u_max = Eigen::VectorXd::Constant(1, ManeuverProblem::inf);
+  p.x_final(2) = dtheta;
+  p.duration_s = T;
+  return p;
+}
+
+/// Two thrusters fixed to the body pushing along body y at the tips s = 0 and s = L.
+FlexibleBody thruster_body() {
+  return FlexibleBody(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), 2,
+                      {{"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
+                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
+}
+
+/// From rest at the origin to rest at (1 m, 0.5 m, 90°) in 3 s, |u| <= 1 N, minimum energy.
+ManeuverProblem slew() {
+  ManeuverProblem p;
+  p.actuators = {0, 1};
+  p.u_min = Eigen::Vector2d(-1.0, -1.0);
+  p.u_max = Eigen::Vector2d(1.0, 1.0);
+  p.x_final << 1.0, 0.5, kPi / 2, 0.0, 0.0, 0.0;
+  p.duration_s = 3.0;
+  return p;
+}
+
+/// Integrates the zero-order model (ZeroOrderModel::rhs) under r.control_at(t), open
+/// loop, with CVODE restarted at every knot (the control is only piecewise smooth).
+Eigen::VectorXd replay(const FlexibleBody& body, const ManeuverProblem& p, const TrajoptResult& r) {
+  const ZeroOrderModel zero(body);
+  const int ne = static_cast<int>(body.elements().size());
+  OdeSystem sys;
+  sys.dim = 6;
+  sys.rhs = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xd) {
+    const Eigen::VectorXd u = r.trajectory->control_at(at);
+    Eigen::VectorXd commands = Eigen::VectorXd::Zero(ne);
+    for (std::size_t k = 0; k < p.actuators.size(); ++k) commands(p.actuators[k]) = u(static_cast<Eigen::Index>(k));
+    zero.rhs(x, commands, xd);
+    return true;
+  };
+  IntegratorOptions io;
+  io.rtol = 1e-10;
+  io.atol = 1e-12;
+  const std::vector<double> knots(r.t.data(), r.t.data() + r.t.size());
+  const IntegrationResult ir = integrate(sys, p.x_initial, {0.0, r.duration_s}, knots, io);
+  REQUIRE(ir.ok);
+  return ir.x.row(ir.x.rows() - 1).transpose();
+}
+
+}  // namespace
+
+TEST_CASE("minimum-energy rotation: Hermite-Simpson is exact at any N", "[trajopt]") {
+  const FlexibleBody body = torque_body();
+  const double I_o = body.integrals().I_o, dth = 1.2, T = 2.0;
+  REQUIRE(I_o == Approx(1.0 / 12.0).epsilon(1e-12));  // closed-form modal integral, round-off only
+  const double J_exact = 12.0 * I_o * I_o * dth * dth / (T * T * T);
+  for (Transcription tr : {Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed})
+  for (int N : {1, 5, 20}) {
+    TrajoptOptions o;
+    o.transcription = tr;
+    o.intervals = N;
+    const TrajoptResult r = solve_maneuver(body, rotation(dth, T), o);
+    INFO(to_string(tr) << ", N = " << N << ": " << r.message);
+    REQUIRE(r.success());
+    // The optimum (cubic θ, linear τ) lies in the HS trial space and Simpson's rule
+    // integrates τ² exactly: only Ipopt's tolerance (tol 1e-8) remains.
+    CHECK(std::abs(r.objective - J_exact) < 1e-8 * J_exact + 1e-12);
+    CHECK(r.max_defect < 1e-9);  // constraint violation at convergence, Ipopt tol 1e-8
+    for (double t : {0.0, 0.3, 1.0, 1.77, 2.0}) {
+      const double tau = I_o * dth * (6.0 - 12.0 * t / T) / (T * T);  // θ'' I_o of the cubic
+      CHECK(std::abs(r.control_at(t)(0) - tau) < 1e-6);  // control error ~ multiplier accuracy
+    }
+  }
+}
+
+TEST_CASE("minimum-energy rotation: the trapezoidal rule converges at second order", "[trajopt]") {
+  const FlexibleBody body = torque_body();
+  const double I_o = body.integrals().I_o, dth = 1.2, T = 2.0;
+  const double J_exact = 12.0 * I_o * I_o * dth * dth / (T * T * T);
+  const std::vector<int> Ns = {10, 20, 40, 80};
+  std::vector<double> err;
+  std::ostringstream table;
+  table << "trapezoidal min-energy rotation, J* = " << J_exact << "\n   N   J - J*       ratio\n";
+  for (int N : Ns) {
+    TrajoptOptions o;
+    o.transcription = Transcription::Trapezoidal;
+    o.intervals = N;
+    const TrajoptResult r = solve_maneuver(body, rotation(dth, T), o);
+    REQUIRE(r.success());
+    err.push_back(r.objective - J_exact);
+    char line[96];
+    std::snprintf(line, sizeof line, "%4d  %.4e  %s\n", N, err.back(),
+                  err.size() > 1 ? std::to_string(err[err.size() - 2] / err.back()).c_str() : "");
+    table << line;
+  }
+  WARN(table.str());
+  for (std::size_t i = 0; i + 1 < err.size(); ++i) {
+    CHECK(err[i] > 0.0);  // a coarser discrete control cannot do better here
+    const double ratio = err[i] / err[i + 1];
+    CHECK(ratio > 3.5);  // halving h divides an O(h²) error by 4; ±0.5 for higher-order terms
+    CHECK(ratio < 4.5);
+  }
+}
+
+TEST_CASE("minimum-time rotation with a bounded torque matches the bang-bang time", "[trajopt]") {
+  const FlexibleBody body = torque_body();
+  const double I_o = body.integrals().I_o, dth = 1.0, tau_max = 0.8;
+  const double T_exact = 2.0 * std::sqrt(I_o * dth / tau_max);
+  ManeuverProblem p = rotation(dth, 1.0);
+  p.u_min(0) = -tau_max;
+  p.u_max(0) = tau_max;
+  p.free_time = true;
+  p.t_min_s = 0.1;
+  p.t_max_s = 5.0;
+  p.w_energy = 0.0;
+  p.w_time = 1.0;
+  for (Transcription tr :
+       {Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed, Transcription::Trapezoidal}) {
+    TrajoptOptions o;
+    o.transcription = tr;
+    o.intervals = 100;
+    const TrajoptResult r = solve_maneuver(body, p, o);
+    INFO(to_string(tr) << ": " << r.message << ", T = " << r.duration_s << ", exact " << T_exact);
+    REQUIRE(r.success());
+    // the switch needs one interval to cross from +τmax to −τmax: O(h²) relative loss
+    CHECK(std::abs(r.duration_s / T_exact - 1.0) < 1e-3);
+    CHECK(r.objective == Approx(r.duration_s).epsilon(1e-12));  // J = w_time T exactly, nothing else weighs
+  }
+}
+
+TEST_CASE("two-thruster slew at minimum energy, replayed open loop", "[trajopt]") {
+  const FlexibleBody body = thruster_body();
+  const ManeuverProblem p = slew();
+  TrajoptOptions o;
+  o.transcription = Transcription::HermiteSimpson;
+  o.intervals = 100;  // default guess: straight line in state space, zero thrust
+  const TrajoptResult r = solve_maneuver(body, p, o);
+  INFO(r.message);
+  REQUIRE(r.success());
+  CHECK(r.max_defect < 1e-9);  // Ipopt tol 1e-8 on the scaled constraints
+  CHECK(r.u.cwiseAbs().maxCoeff() <= 1.0 + 1e-8);  // bounds hold up to Ipopt's bound relaxation
+  REQUIRE(r.trajectory);
+  CHECK(r.t.size() == 101);
+  CHECK(r.u_mid.rows() == 100);
+
+  const Eigen::VectorXd xT = replay(body, p, r);
+  const double pos_err = (xT.head<2>() - p.x_final.head<2>()).cwiseAbs().maxCoeff();
+  const double ang_err = std::abs(xT(2) - p.x_final(2));
+  const double rate_err = (xT.tail<3>() - p.x_final.tail<3>()).cwiseAbs().maxCoeff();
+  WARN("slew, HS N = 100: J = " << r.objective << " N^2 s, " << r.iterations << " iterations, "
+                                << r.solve_time_s << " s; open-loop replay misses the target by " << pos_err
+                                << " m, " << ang_err << " rad, " << rate_err << " m/s or rad/s");
+  CHECK(pos_err < 1e-4);   // required accuracy; HS is O(h⁴) (observed ~1e-7)
+  CHECK(ang_err < 1e-4);   // same
+  CHECK(rate_err < 1e-4);  // same
+  // The trajectory says the same as the replay: its error estimate is small.
+  CHECK(r.max_error_estimate < 1e-5);
+
+  // The compressed form is the same discretization: the same optimum.
+  o.transcription = Transcription::HermiteSimpsonCompressed;
+  const TrajoptResult rc = solve_maneuver(body, p, o);
+  REQUIRE(rc.success());
+  CHECK(rc.objective == Approx(r.objective).epsilon(1e-9));  // both converged to tol 1e-8
+  // controls are a flat direction of the cost where the thrust saturates: they agree to the
+  // solver tolerance only through the dynamics (observed 5e-6)
+  CHECK((rc.u - r.u).cwiseAbs().maxCoeff() < 5e-5);
+  CHECK((rc.u_mid - r.u_mid).cwiseAbs().maxCoeff() < 5e-5);
+  CHECK((rc.x_mid - r.x_mid).cwiseAbs().maxCoeff() < 1e-6);  // states are pinned by the dynamics: tighter
+  CHECK((replay(body, p, rc) - p.x_final).cwiseAbs().maxCoeff() < 1e-4);  // as for the separated form
+
+  // The trapezoidal solution of the same problem converges too, to a nearby cost.
+  o.transcription = Transcription::Trapezoidal;
+  const TrajoptResult rt = solve_maneuver(body, p, o);
+  REQUIRE(rt.success());
+  CHECK(std::abs(rt.objective - r.objective) < 0.01 * r.objective);  // O(h²) ~ 1e-3 relative at N = 100
+}
+
+TEST_CASE("two-thruster slew at minimum time", "[trajopt]") {
+  const FlexibleBody body = thruster_body();
+  ManeuverProblem p = slew();
+  p.free_time = true;
+  p.t_min_s = 0.5;
+  p.t_max_s = 10.0;
+  p.w_energy = 0.0;
+  p.w_time = 1.0;
+  TrajoptOptions o;
+  o.transcription = Transcription::HermiteSimpson;
+  o.intervals = 100;
+  const TrajoptResult r = solve_maneuver(body, p, o);
+  INFO(r.message);
+  REQUIRE(r.success());
+  WARN("slew, minimum time, HS N = 100: T* = " << r.duration_s << " s (" << r.iterations << " iterations, "
+                                               << r.solve_time_s << " s)");
+  // Faster than the 3 s energy-optimal slew, slower than thrusting straight at 2 N
+  // (1.118 m rest to rest needs 2 sqrt(1.118 / 2) = 1.50 s) since the body must turn.
+  CHECK(r.duration_s < 3.0);
+  CHECK(r.duration_s > 1.5);
+  CHECK(r.duration_s > p.t_min_s + 0.1);  // an interior optimum, not the bound
+  // Bang-bang thrust: most knots sit on a bound.
+  int on_bound = 0;
+  for (Eigen::Index i = 0; i < r.u.size(); ++i) on_bound += std::abs(std::abs(r.u(i)) - 1.0) < 1e-4;
+  CHECK(on_bound > r.u.size() / 2);
+  const Eigen::VectorXd xT = replay(body, p, r);
+  INFO("replay end state " << xT.transpose());
+  CHECK((xT - p.x_final).cwiseAbs().maxCoeff() < 1e-3);  // bang-bang kinks cost accuracy; still O(h⁴) between
+}
+
+TEST_CASE("an unreachable target ends infeasible, not as a solution", "[trajopt]") {
+  const FlexibleBody body = torque_body();
+  // |τ| <= 0.1 N m turns I_o = 1/12 by at most τ T²/(4 I_o) = 0.3 rad rest to rest in 1 s.
+  ManeuverProblem p = rotation(10.0, 1.0);
+  p.u_min(0) = -0.1;
+  p.u_max(0) = 0.1;
+  for (Transcription tr :
+       {Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed, Transcription::Trapezoidal}) {
+    TrajoptOptions o;
+    o.transcription = tr;
+    o.intervals = 20;
+    const TrajoptResult r = solve_maneuver(body, p, o);
+    INFO(to_string(tr) << ": " << r.message);
+    CHECK_FALSE(r.success());
+    CHECK(r.status == TrajoptStatus::Infeasible);
+    CHECK(r.message.find("not a solution") != std::string::npos);
+    CHECK(r.max_defect > 1e-3);  // the returned point violates the dynamics
+  }
+}
+
+TEST_CASE("mesh refinement drives the error estimate below its tolerance", "[trajopt]") {
+  const FlexibleBody body = thruster_body();
+  const ManeuverProblem p = slew();
+  TrajoptOptions o;
+  o.transcription = Transcription::Trapezoidal;
+  o.intervals = 20;
+  o.mesh_refinements = 6;
+  o.mesh_tolerance = 1e-4;
+  const TrajoptResult r = solve_maneuver(body, p, o);
+  INFO(r.message);
+  REQUIRE(r.success());
+  REQUIRE(r.rounds.size() >= 2);
+  std::ostringstream s;
+  for (const MeshRound& m : r.rounds)
+    s << "N = " << m.intervals << ": " << m.iterations << " iterations, max error estimate " << m.max_error_estimate
+      << ", J = " << m.objective << "\n";
+  INFO(s.str());
+  CHECK(r.rounds.front().max_error_estimate > o.mesh_tolerance);  // refinement had work to do
+  CHECK(r.max_error_estimate <= o.mesh_tolerance);
+  CHECK(r.intervals == r.rounds.back().intervals);
+  CHECK(r.intervals > 20);
+  for (std::size_t i = 1; i < r.rounds.size(); ++i) {
+    CHECK(r.rounds[i].intervals > r.rounds[i - 1].intervals);
+    CHECK(r.rounds[i].iterations < r.rounds[0].iterations);  // warm starts pay off
+  }
+  // Local refinement beats uniform: fewer intervals than a uniform mesh of the same finest h.
+  double h_min = 1.0;
+  for (Eigen::Index k = 0; k + 1 < r.t.size(); ++k) h_min = std::min(h_min, r.t(k + 1) - r.t(k));
+  CHECK(r.intervals < static_cast<int>(std::round(r.duration_s / h_min)));
+}
+
+TEST_CASE("warm starts and control guesses", "[trajopt]") {
+  const FlexibleBody body = thruster_body();
+  const ManeuverProblem p = slew();
+  TrajoptOptions o;
+  o.intervals = 40;
+  const TrajoptResult cold = solve_maneuver(body, p, o);
+  REQUIRE(cold.success());
+
+  // A previous solution on another mesh and transcription is interpolated.
+  TrajoptOptions warm = o;
+  warm.intervals = 60;
+  warm.guess.solution = cold.trajectory;
+  warm.ipopt_options = {{"mu_init", "1e-6"}};
+  const TrajoptResult w = solve_maneuver(body, p, warm);
+  REQUIRE(w.success());
+  CHECK(w.iterations < cold.iterations);
+  CHECK(w.objective == Approx(cold.objective).epsilon(1e-4));  // HS: O(h⁴) between N = 40 and 60
+
+  // A pulse guess with a rollout of the dynamics (the paper's ±1 pulse on the right tip).
+  TrajoptOptions pulse = o;
+  pulse.guess.control = [](double t) { return Eigen::Vector2d(0.0, t < 0.5 ? 1.0 : (t < 1.0 ? -1.0 : 0.0)); };
+  pulse.guess.rollout = true;
+  const TrajoptResult r = solve_maneuver(body, p, pulse);
+  REQUIRE(r.success());
+  CHECK(r.objective == Approx(cold.objective).epsilon(1e-8));  // the same local optimum
+}
+
+TEST_CASE("the collocation trajectory is a consistent RigidTrajectory", "[trajopt]") {
+  const FlexibleBody body = thruster_body();
+  TrajoptOptions o;
+  o.intervals = 30;
+  for (Transcription tr :
+       {Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed, Transcription::Trapezoidal}) {
+    o.transcription = tr;
+    const TrajoptResult r = solve_maneuver(body, slew(), o);
+    REQUIRE(r.success());
+    const CollocationTrajectory& traj = *r.trajectory;
+    CHECK(traj.t_begin() == 0.0);
+    CHECK(traj.t_end() == Approx(3.0).epsilon(1e-14));  // T fixed; Σ σ_k = 1 up to round-off
+    CHECK(traj.breakpoints().size() == 29);
+    const RigidDynamics& dyn = traj.dynamics();
+    for (int k = 0; k <= 30; ++k) {  // knots are interpolated exactly
+      const RigidState s = traj.at(Instant::at(r.t(k)));
+      // Hermite basis at s = 0 or 1 returns the knot values up to round-off
+      CHECK((s.pos - r.x.row(k).head<3>().transpose()).cwiseAbs().maxCoeff() < 1e-14);
+      CHECK((s.vel - r.x.row(k).tail<3>().transpose()).cwiseAbs().maxCoeff() < 1e-14);
+      CHECK((traj.control_at(r.t(k)) - r.u.row(k).transpose()).cwiseAbs().maxCoeff() < 1e-14);  // same
+    }
+    if (has_midpoints(tr))
+      for (int k = 0; k < 30; ++k) {  // the cubic passes through the midpoint states (defect ~ tol)
+        CHECK((traj.state_at(r.t_mid(k)) - r.x_mid.row(k).transpose()).cwiseAbs().maxCoeff() < 1e-9);
+        // the quadratic through knot, midpoint, knot: exact at s = 1/2 up to round-off
+        CHECK((traj.control_at(r.t_mid(k)) - r.u_mid.row(k).transpose()).cwiseAbs().maxCoeff() < 1e-14);
+      }
+    for (double t : {0.01, 1.234, 2.99}) {  // acceleration = the model at the interpolated point
+      const RigidState s = traj.at(Instant::at(t));
+      const Eigen::Matrix<double, 6, 1> f = dyn.eval(traj.state_at(t), traj.control_at(t));
+      CHECK((s.acc - f.tail<3>()).cwiseAbs().maxCoeff() == 0.0);
+    }
+    CHECK(traj.control_at(-0.1).isZero());
+    CHECK(traj.control_at(3.1).isZero());
+  }
+}
