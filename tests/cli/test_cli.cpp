@@ -185,3 +185,26 @@ TEST_CASE("suppression of the paper's moment maneuver cuts the residual energy t
   CHECK_THAT(cmp, Contains("tvlqr,nonlinear,"));
   CHECK(cmp.substr(cmp.find("tvlqr,nonlinear,")).find(",0\n") != std::string::npos);
 }
+
+TEST_CASE("bad controller input exits 2: weights, horizon, actuator name", "[cli][control]") {
+  const std::string head =
+      "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n"
+      "[[load]]\nname = \"Mz\"\ntype = \"torque\"\nposition_m = 0.5\n[load.profile]\ntype = \"steps\"\n"
+      "times_s = [0.0, 0.5, 1.0]\nvalues = [1.0, -1.0]\n"
+      "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 1.0\n[controller]\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"actuators = [\"hub\"]\nhorizon_s = 3.0\nweight_rigid_rate = -2.0\n", "Q must be positive semidefinite"},
+      {"actuators = [\"hub\"]\nhorizon_s = 3.0\ninput_weights = [-1.0]\n", "R must be positive definite"},
+      {"actuators = [\"hub\"]\nhorizon_s = 0.8\n", "shorter than the maneuver"},
+      {"actuators = [\"tip\"]\nhorizon_s = 3.0\n", "\"tip\" is not an [[actuator]] (known: 'hub')"},
+  };
+  for (const auto& [text, expect] : cases) {
+    const std::string design = write_temp("badctl", head + text);
+    const std::string out = temp_path("out");
+    const CliResult r = run_cli("run " + design + " --out " + out);
+    INFO(r.output);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.output, Contains(expect));
+    CHECK(!exists(out));
+  }
+}
