@@ -439,6 +439,27 @@ void read_controller(Section& root, Design& d) {
   d.controller = st;
 }
 
+void read_bang_bang(Section& root, Design& d) {
+  Section b = root.table("bang_bang");
+  if (!b.present()) return;
+  BangBangStudy st;
+  if (auto name = b.string("actuator", true)) {
+    const auto idx = actuator_indices(b, "actuator", {*name}, d);
+    if (!idx.empty()) {
+      st.actuator = idx[0];
+      st.actuator_name = *name;
+      const ActuatorSpec& a = d.actuators[static_cast<std::size_t>(idx[0]) - d.loads.size()];
+      if (a.element.type != ForceElement::Type::Torque) b.problem("actuator", b.key_path("actuator") + ": \"" + *name + "\" must be a torque");
+      if (!(a.limit > 0)) b.problem("actuator", b.key_path("actuator") + ": \"" + *name + "\" needs a limit (the bang-bang level)");
+    }
+  }
+  if (auto k = b.integer_array("modes", 0, 4, false)) st.modes.assign(k->begin(), k->end());
+  else st.modes = {1, 2};
+  b.finish();
+  if (!root.has("controller")) b.problem("actuator", "[bang_bang] is compared beside a [controller]; add one");
+  d.bang_bang = st;
+}
+
 }  // namespace
 
 std::vector<ForceElement> Design::force_elements() const {
@@ -485,6 +506,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   read_simulation(root, d);
   read_maneuver(root, d);
   read_controller(root, d);
+  read_bang_bang(root, d);
   root.finish();
   if (problems.empty()) {
     try {

@@ -87,6 +87,14 @@ struct ControllerStudy {
   std::string figure = "comparison";
 };
 
+/// [bang_bang]: rest-to-rest bang-bang rotations by one torque actuator at o whose switch
+/// times leave the first k elastic modes at rest (compared beside the controller).
+struct BangBangStudy {
+  std::string actuator_name;
+  int actuator = -1;          ///< element index
+  std::vector<int> modes;     ///< k values, each in [0, 4]
+};
+
 struct Design {
   std::string source;  ///< file name, for messages
   std::string title;
@@ -100,6 +108,7 @@ struct Design {
   std::optional<SimulationStudy> simulation;
   std::optional<ManeuverStudy> maneuver;
   std::optional<ControllerStudy> controller;
+  std::optional<BangBangStudy> bang_bang;
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;
