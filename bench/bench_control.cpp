@@ -1,0 +1,72 @@
+// Benchmark (not a test): TV-LQR solve time (backward Riccati, feedforward and gains on
+// the 5 ms grid) for the paper's moment example (M_z = ±1 N m pulse at the centre of the
+// 1 m, 1 kg, EI = 1 beam; feedback by a torque at o and body-y thrusters at both tips),
+// horizon 3 s, Q = vibration_weight(1, 10, 1), R = diag(1, 1/4, 1/4), rtol 1e-8 (and
+// 1e-6), for NOA = 6 and 20. Goal: under 20 ms for NOA = 6.
+//   cmake -S . -B build-bench -DFREEFLEX_BUILD_BENCHMARKS=ON && cmake --build build-bench
+//   build-bench/bench/bench_control
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "freeflex/control/closed_loop.hpp"
+#include "freeflex/control/tvlqr.hpp"
+#include "freeflex/sim/simulate.hpp"
+
+using namespace freeflex;
+
+namespace {
+
+struct Case {
+  FlexibleBody body;
+  Excitation loads;
+  std::shared_ptr<const RigidTrajectory> nominal;
+  std::unique_ptr<FirstOrderModel> model;
+  TvlqrOptions options;
+};
+
+std::unique_ptr<Case> moment_case(int noa, double rtol) {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  auto c = std::make_unique<Case>(Case{
+      FlexibleBody(beam, noa,
+                   {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
+                    {"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
+                    {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
+                    {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}}),
+      Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt,
+                  std::nullopt}},
+      nullptr, nullptr, TvlqrOptions{}});
+  SimulationOptions so;
+  so.duration_s = 3.0;
+  so.output_step_s = 0.01;
+  c->nominal = simulate_perturbation(c->body, c->loads, so).nominal;
+  const std::vector<int> inputs{1, 2, 3};
+  c->model = std::make_unique<FirstOrderModel>(c->body, *c->nominal, nominal_element_commands(c->loads, inputs), inputs);
+  c->options.t0 = 0.0;
+  c->options.tf = 3.0;
+  c->options.Q = vibration_weight(c->body, 1.0, 10.0, 1.0);
+  c->options.R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
+  c->options.rtol = rtol;
+  return c;
+}
+
+void BM_tvlqr(benchmark::State& state) {
+  const double rtol = state.range(1) == 0 ? 1e-8 : 1e-6;
+  const auto c = moment_case(static_cast<int>(state.range(0)), rtol);
+  TvlqrResult r;
+  for (auto _ : state) {
+    r = solve_tvlqr(*c->model, c->options);
+    benchmark::DoNotOptimize(r.K.data());
+  }
+  if (!r.ok()) state.SkipWithError(r.message.c_str());
+  state.counters["steps"] = static_cast<double>(r.steps);
+  state.counters["rhs_evals"] = static_cast<double>(r.rhs_evaluations);
+  state.counters["gmres_iters"] = static_cast<double>(r.linear_iterations);
+  state.counters["prec_setups"] = static_cast<double>(r.preconditioner_setups);
+  state.SetLabel(state.range(1) == 0 ? "rtol 1e-8" : "rtol 1e-6");
+}
+
+}  // namespace
+
+BENCHMARK(BM_tvlqr)->ArgsProduct({{6, 20}, {0, 1}})->Unit(benchmark::kMillisecond);
+BENCHMARK_MAIN();

@@ -1,0 +1,130 @@
+#pragma once
+// Bang-bang rest-to-rest rotation that leaves the first k excited elastic modes at rest.
+//
+// One torque actuator at o on a beam with S_o = 0 (o at the mass centre) turns the beam
+// by Δθ with |τ| <= τmax. The rigid motion is θ0'' = τ/I_o (eq. 6.3); the rigid
+// time-optimal answer is one switch, T* = 2 sqrt(I_o Δθ / τmax). The torque excites the
+// modes that move θ (the antisymmetric ones on a uniform beam) through the forcing
+// −Φ̃ᵀ θ0'' of the first-order model (eq. 7.2); with θ0' ≠ 0 the stiffness is also
+// softened, K − θ0'² M (eq. 7.1).
+//
+// Structure (the classical time-optimal one for a rigid body plus k undamped modes):
+// 2k+1 switches, signs +, −, +, ... (2k+2 intervals). The unknowns are the interval
+// durations Δ_0..Δ_{2k+1} >= 0; the constraints are the rigid rest-to-rest conditions
+// θ0(T) = Δθ, θ0'(T) = 0 and, for each targeted mode j, [ω_j η_j(T), η_j'(T)] = 0 (η_j
+// the modal coordinate of the first-order state at T, mass-normalized modes of the rest
+// model, eq. 4.1): 2k + 2 equations for 2k + 2 unknowns, minimizing T = Σ Δ.
+//
+// Two stages, both with NLopt's SLSQP:
+//  1. closed form: modes frozen about rest and θ0'² neglected, so each mode is a forced
+//     oscillator with residual amplitude ∝ |Σ_i c_i e^{iω t_i}| (c_i the torque jumps);
+//     analytic gradients, multi-start, the shortest feasible design kept;
+//  2. the first-order model itself (θ0'² softening and all couplings), simulated with
+//     CVODES for every evaluation, gradients by central differences, started from 1.
+// The residual energy reported is that of the first-order simulation at T.
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/dynamics/flexible_body.hpp"
+#include "freeflex/dynamics/zero_order.hpp"
+#include "freeflex/model/loads.hpp"
+
+namespace freeflex {
+
+/// θ0(t) of a bang-bang torque ±τmax at o (S_o = 0, R0 = 0): signs +, −, +, ... on the
+/// intervals between 0, the switch times and the duration; at rest after it.
+class BangBangRotation : public RigidTrajectory {
+ public:
+  /// Throws std::invalid_argument for I_o or τmax <= 0, or times not ascending in (0, T).
+  BangBangRotation(double I_o, double torque_limit_Nm, std::vector<double> switch_times, double duration_s);
+  RigidState at(const Instant& when) const override;
+  double t_begin() const override { return 0.0; }
+  double t_end() const override { return duration_; }
+  std::vector<double> breakpoints() const override;
+  /// The torque of the piece containing when.piece_mid (0 after the duration).
+  double torque(const Instant& when) const;
+  /// The torque as a Steps profile.
+  TimeProfile profile() const;
+
+ private:
+  int piece(double piece_mid) const;
+  double tau_max_, accel_, duration_;
+  std::vector<double> t_;      // 0, switches, T
+  std::vector<double> theta_, rate_;  // at each t_
+};
+
+struct SwitchTimeOptions {
+  int actuator = -1;               ///< element index of a torque at o
+  double rotation_rad = 3.0;       ///< Δθ > 0
+  double torque_limit_Nm = 1.0;    ///< τmax > 0
+  int modes = 1;                   ///< k in [0, 4]: excited elastic modes left at rest
+  double rtol = 1e-10;             ///< first-order simulations (Adams)
+  double atol = 1e-13;
+  /// On the scaled constraints (each modal one is sqrt(E_j / E_rigid)): 1e-7 leaves
+  /// E_j / E_rigid ~ 1e-14.
+  double constraint_tolerance = 1e-7;
+  int starts = 24;                 ///< multi-start count of the closed-form stage
+  int max_evaluations = 200;       ///< SLSQP iterations per stage
+};
+
+struct SwitchTimeResult {
+  enum class Status { Solved, NotConverged };
+  Status status = Status::NotConverged;
+  std::string message;
+  bool ok() const { return status == Status::Solved; }
+
+  std::vector<double> switch_times;  ///< 2k+1 interior switch times [s]
+  double duration_s = 0.0;           ///< T
+  double rigid_duration_s = 0.0;     ///< T* = 2 sqrt(I_o Δθ / τmax)
+  std::vector<double> closed_form_switch_times;  ///< stage 1
+  double closed_form_duration_s = 0.0;
+  double closed_form_residual_ratio = 0.0;  ///< stage-1 design simulated in the first-order model
+
+  Eigen::VectorXd mode_frequencies_rad_s;  ///< the targeted modes (rest model)
+  Eigen::VectorXd residual_energy_J;       ///< of each targeted mode at T (first-order model)
+  double peak_rate_rad_s = 0.0;            ///< max θ0'
+  double rigid_kinetic_peak_J = 0.0;       ///< ½ I_o θ0'max²
+  double residual_ratio = 0.0;             ///< Σ residual_energy_J / rigid_kinetic_peak_J
+  double final_angle_rad = 0.0;            ///< θ0(T)
+  double final_rate_rad_s = 0.0;           ///< θ0'(T)
+  int simulations = 0;                     ///< first-order simulations in stage 2
+  double wall_time_s = 0.0;
+
+  TimeProfile torque_profile() const;  ///< needs the limit: ±τmax Steps (stored below)
+  double torque_limit_Nm = 0.0;
+};
+
+/// Throws std::invalid_argument (before any work) if the actuator is not an element of
+/// the body, not a torque, not at o, if S_o != 0, or for Δθ, τmax, k, tolerances out of range.
+SwitchTimeResult design_switch_times(const FlexibleBody& body, const SwitchTimeOptions& options);
+
+/// The first-order model's state at the end of a bang-bang rotation and the energy of
+/// the first `modes` excited elastic modes in it.
+struct BangBangResidual {
+  bool ok = false;
+  std::string message;
+  Eigen::VectorXd omega_rad_s;     ///< targeted modes
+  Eigen::VectorXd energy_J;        ///< ½(η'² + ω² η²) of each
+  Eigen::VectorXd x1_end;          ///< first-order state at T
+  double peak_rate_rad_s = 0.0;
+  double rigid_kinetic_peak_J = 0.0;
+};
+
+/// Simulates the first-order model about BangBangRotation(I_o, τmax, switch_times, T)
+/// with the torque on `actuator` (validated as in design_switch_times).
+BangBangResidual bang_bang_residual(const FlexibleBody& body, int actuator, double torque_limit_Nm,
+                                    const std::vector<double>& switch_times, double duration_s, int modes,
+                                    double rtol = 1e-11, double atol = 1e-14);
+
+/// Zero-vibration input shapers for one mode (ω, ζ): impulse times [s] and amplitudes
+/// (summing to 1). ZV: 2 impulses; ZVD: 3 (robust to frequency error).
+struct InputShaper {
+  std::vector<double> times;
+  std::vector<double> amplitudes;
+};
+InputShaper zv_shaper(double omega_rad_s, double zeta = 0.0);
+InputShaper zvd_shaper(double omega_rad_s, double zeta = 0.0);
+
+}  // namespace freeflex

@@ -1,0 +1,119 @@
+#pragma once
+// Finite-horizon time-varying LQR (TV-LQR) on the first-order model x1' = A x1 + B u1 + g
+// (eq. 7.3) over [t0, tf], minimizing
+//   J = ∫ (x1ᵀ Q x1 + u1ᵀ R u1) dt + x1(tf)ᵀ Qf x1(tf).
+// The value function is V(t, x) = xᵀ P x + 2 sᵀ x + c with, backwards from tf,
+//   −P' = Aᵀ P + P A − P S P + Q,    P(tf) = Qf,  S = B R⁻¹ Bᵀ     (Riccati)
+//   −s' = (A − B K)ᵀ s + P g,        s(tf) = 0                      (known forcing)
+//   −c' = 2 sᵀ g − sᵀ S s,           c(tf) = 0
+// and the optimal law u1 = −K x1 + u_ff with K = R⁻¹ Bᵀ P, u_ff = −R⁻¹ Bᵀ s.
+//
+// Integration (why it is done this way): P, s, c are integrated together by CVODES BDF
+// in reversed time τ = tf − t (where the Riccati flow is stable), with the full P as
+// state (n² entries; symmetric up to round-off, which the stable flow does not amplify;
+// the full square keeps every product a plain matrix product). The Newton systems
+// (I − γJ) of BDF are solved exactly for a closed loop A_cl = A − S P frozen at CVODES'
+// last setup (or, on request, by GMRES preconditioned with that solve): the P block is the
+// shifted Lyapunov equation
+// (A_clᵀ − I/2γ) Z + Z (A_cl − I/2γ) = −R/γ and the s, c blocks follow by triangular
+// solves, all from one complex Schur form of A_cl (O(n³) instead of the O(n⁶) dense LU
+// of an n²-dimensional Jacobian: 18 states → 342 unknowns, 46 → 2162 for NOA = 20).
+// BDF rather than Adams because the flexible modes make the flow stiff (closed-loop
+// frequencies to ~1e3 rad/s at NOA = 6): an explicit step would be bound by them.
+// The model is evaluated at Instant{t, piece_mid} of the pieces between the breakpoints
+// of the nominal motion (plus any given), and the integrator restarts at each of them.
+//
+// K(t) and u_ff(t) are stored on a grid (t0, t0 + h, ..., tf, and every breakpoint) and
+// interpolated linearly; both are continuous in t (B depends on θ0, not on θ0''), so a
+// breakpoint needs one value. P is scaled by σ = max(|Qf|_max, |Q|_max) while integrated,
+// so `atol` is relative to the largest weight.
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/control/lqr.hpp"
+#include "freeflex/dynamics/first_order.hpp"
+
+namespace freeflex {
+
+/// A(t), B(t), g(t) of x' = A x + B u + g at an instant (sizes n x n, n x m, n).
+using StateSpaceFunction =
+    std::function<void(const Instant&, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g)>;
+
+/// A linear time-varying system: what the TV-LQR needs of a model.
+struct LtvSystem {
+  int state_size = 0;
+  int input_size = 0;
+  StateSpaceFunction state_space;
+  std::vector<double> breakpoints;  ///< where A, B or g may jump
+};
+
+/// The first-order model as an LtvSystem (breakpoints of its nominal motion). The model
+/// must outlive the result.
+LtvSystem ltv_system(const FirstOrderModel& model);
+
+struct TvlqrOptions {
+  double t0 = 0.0;   ///< [s]
+  double tf = 3.0;   ///< [s], > t0
+  Eigen::MatrixXd Q;  ///< n x n, symmetric PSD
+  Eigen::MatrixXd R;  ///< m x m, symmetric PD
+  /// n x n symmetric PSD; empty: the CARE solution of the model at tf (on its
+  /// controllable subspace, see CareOptions::restrict_to_controllable).
+  std::optional<Eigen::MatrixXd> Qf;
+  double grid_step_s = 0.005;  ///< spacing of the stored gains
+  double rtol = 1e-8;          ///< CVODES relative tolerance
+  double atol = 1e-10;         ///< absolute tolerance, relative to σ (see above)
+  long max_steps = 200000;     ///< per piece
+  std::vector<double> breakpoints;  ///< extra breakpoints (e.g. load profile times)
+  bool store_riccati = false;       ///< keep P at every grid time (n² doubles each)
+  /// Newton systems of BDF: Lyapunov = the exact solve for the closed loop frozen at the
+  /// last setup (modified Newton, one O(n³) solve per iteration); Gmres = GMRES with that
+  /// solve as preconditioner and exact Jacobian products (more work per iteration, kept as
+  /// a cross-check).
+  enum class NewtonSolver { Lyapunov, Gmres } newton_solver = NewtonSolver::Lyapunov;
+};
+
+struct TvlqrResult {
+  enum class Status { Solved, TerminalCareFailed, IntegrationFailed };
+  Status status = Status::IntegrationFailed;
+  std::string message;
+  bool ok() const { return status == Status::Solved; }
+
+  std::vector<double> t;                 ///< grid, ascending from t0 to tf
+  std::vector<Eigen::MatrixXd> K;        ///< m x n gain at each grid time
+  Eigen::MatrixXd feedforward;           ///< one row per grid time: u_ff = −R⁻¹ Bᵀ s
+  std::vector<Eigen::MatrixXd> P;        ///< only with store_riccati
+  Eigen::MatrixXd P0;                    ///< P(t0)
+  Eigen::VectorXd s0;                    ///< s(t0)
+  double c0 = 0.0;                       ///< c(t0)
+  Eigen::MatrixXd Qf;                    ///< the terminal weight used
+  std::optional<CareResult> terminal_care;  ///< when Qf was defaulted
+
+  long steps = 0;
+  long rhs_evaluations = 0;
+  long linear_iterations = 0;
+  long preconditioner_setups = 0;
+  double wall_time_s = 0.0;
+
+  /// Linear interpolation on the grid, held constant outside [t0, tf].
+  Eigen::MatrixXd gain(double time) const;
+  Eigen::VectorXd feedforward_at(double time) const;
+  /// u1 = −K(t) x1 + u_ff(t).
+  Eigen::VectorXd control(double time, const Eigen::Ref<const Eigen::VectorXd>& x1) const;
+  /// Optimal cost from x1 at t0: x1ᵀ P0 x1 + 2 s0ᵀ x1 + c0.
+  double predicted_cost(const Eigen::Ref<const Eigen::VectorXd>& x1) const;
+};
+
+/// TV-LQR on any LTV system. Throws std::invalid_argument (before any work) for
+/// tf <= t0, non-finite times, a grid step <= 0, tolerances <= 0, weight sizes, Q or Qf
+/// not PSD, R not PD. Numerical failure (terminal CARE, CVODES) is reported in the result.
+TvlqrResult solve_tvlqr(const LtvSystem& system, const TvlqrOptions& options);
+
+/// TV-LQR on the first-order model. Additionally requires t0 >= nominal().t_begin() and
+/// tf >= nominal().t_end(): the horizon must cover the whole nominal maneuver.
+TvlqrResult solve_tvlqr(const FirstOrderModel& model, const TvlqrOptions& options);
+
+}  // namespace freeflex

@@ -1,0 +1,141 @@
+// TV-LQR vibration suppression on the paper's moment example, evaluated on the first-order
+// model it was designed on and on the full nonlinear model; response metrics on known
+// signals.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <iostream>
+
+#include "freeflex/control/closed_loop.hpp"
+#include "freeflex/control/metrics.hpp"
+#include "freeflex/sim/simulate.hpp"
+
+using namespace freeflex;
+
+namespace {
+
+/// The paper's moment example (1 m, 1 kg, EI = 1, NOA 6): the load M_z = ±1 N m at the
+/// centre (0–0.5 s +1, 0.5–1 s −1) drives the nominal maneuver θ0: 0 → 3 rad. Feedback
+/// actuators: a torque at o (element 1) and body-y thrusters at both tips (2, 3).
+FlexibleBody moment_body(int noa) {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  return FlexibleBody(beam, noa,
+                      {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
+                       {"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
+                       {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
+                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
+}
+
+Excitation moment_loads() {
+  return Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt,
+                     std::nullopt}};
+}
+
+}  // namespace
+
+TEST_CASE("TV-LQR on the moment example: residual vibration cut on the LTV and the full model", "[control]") {
+  const FlexibleBody body = moment_body(6);
+  const Excitation loads = moment_loads();
+  SimulationOptions so;
+  so.duration_s = 3.0;
+  so.output_step_s = 0.005;
+  so.integrator.rtol = 1e-9;
+  so.integrator.atol = 1e-11;
+  const PerturbationResult pert = simulate_perturbation(body, loads, so);
+  const SimulationResult open = simulate_full(body, loads, so);
+  REQUIRE(pert.total.ok);
+  REQUIRE(open.ok);
+  MetricTargets target;
+  target.theta_target = 3.0;  // θ0(1 s) = 3 rad, at rest after
+  const ResponseMetrics m_open_full = response_metrics(body, open.t, open.z, open.z_dot, Eigen::MatrixXd(), target);
+  const ResponseMetrics m_open_pert =
+      response_metrics(body, pert.total.t, pert.total.z, pert.total.z_dot, Eigen::MatrixXd(), target);
+
+  const std::vector<int> inputs{1, 2, 3};
+  const FirstOrderModel model(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
+  // Limits 1 N m (torque) and 2 N (thrusters); Bryson-scaled R = diag(1/limit²);
+  // Q weights twice the elastic energy, rigid errors 10 per m² or rad², rates 1.
+  const Eigen::Vector3d limits(1.0, 2.0, 2.0);
+  TvlqrOptions o;
+  o.t0 = 0.0;
+  o.tf = 3.0;
+  o.Q = vibration_weight(body, 1.0, 10.0, 1.0);
+  o.R = limits.cwiseInverse().cwiseAbs2().asDiagonal();
+  const TvlqrResult law = solve_tvlqr(model, o);
+  REQUIRE(law.ok());
+  REQUIRE(law.terminal_care);
+  CHECK(law.terminal_care->uncontrollable_dimension == 2);  // the axial translation
+
+  ClosedLoopOptions co;
+  co.limits = limits;
+  co.integrator.rtol = 1e-9;
+  co.integrator.atol = 1e-11;
+  const ClosedLoopResult ltv = simulate_closed_loop_first_order(model, law, {}, co);
+  const ClosedLoopResult full = simulate_closed_loop_full(model, loads, {}, law, co);
+  REQUIRE(ltv.ok);
+  REQUIRE(full.ok);
+  const ResponseMetrics m_ltv = response_metrics(body, ltv.t, ltv.z, ltv.z_dot, ltv.commands, target);
+  const ResponseMetrics m_full = response_metrics(body, full.t, full.z, full.z_dot, full.commands, target);
+
+  const double gain_ltv = m_open_pert.residual_vibration_energy_J / m_ltv.residual_vibration_energy_J;
+  const double gain_full = m_open_full.residual_vibration_energy_J / m_full.residual_vibration_energy_J;
+  auto report = [](const char* name, const ResponseMetrics& m) {
+    std::cout << "[control]   " << name << ": E(3 s) " << m.residual_vibration_energy_J << " J, peak tip "
+              << m.peak_tip_deflection_m << " m, tip settles " << m.tip_settling_time_s << " s"
+              << (m.settled ? "" : " (not settled)") << ", |R err| " << m.final_position_error_m << " m, |theta err| "
+              << m.final_attitude_error_rad << " rad, int u'u " << m.control_effort << ", peak |u| " << m.peak_command
+              << "\n";
+  };
+  std::cout << "[control] moment example, NOA 6, TV-LQR solved in " << law.wall_time_s << " s (" << law.steps
+            << " steps)\n";
+  report("open loop, perturbation", m_open_pert);
+  report("open loop, full        ", m_open_full);
+  report("TV-LQR on LTV          ", m_ltv);
+  report("TV-LQR on full         ", m_full);
+  std::cout << "[control]   energy reduction: LTV " << gain_ltv << "x, full " << gain_full << "x; saturated fraction LTV "
+            << ltv.saturated_fraction << ", full " << full.saturated_fraction << "; peak demand per actuator (full) "
+            << full.demanded.cwiseAbs().colwise().maxCoeff() << "\n";
+
+  CHECK(gain_ltv >= 10.0);   // the brief's bound
+  CHECK(gain_full >= 10.0);  // the brief's bound
+  // Within bounds without relying on the saturation: the demanded commands themselves.
+  for (int k = 0; k < 3; ++k) {
+    CHECK(ltv.demanded.col(k).cwiseAbs().maxCoeff() <= limits(k));
+    CHECK(full.demanded.col(k).cwiseAbs().maxCoeff() <= limits(k));
+  }
+  // The rigid maneuver is held: open loop ends 0.1 rad off (nonlinearity), closed loop not.
+  CHECK(m_open_full.final_attitude_error_rad > 0.05);
+  CHECK(m_full.final_attitude_error_rad < 1e-3);
+  CHECK(m_full.peak_tip_deflection_m < m_open_full.peak_tip_deflection_m);
+}
+
+TEST_CASE("response metrics on known signals", "[control]") {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  const FlexibleBody body(beam, 2, {});
+  const int T = 8001, N = body.dofs();
+  Eigen::VectorXd t(T);
+  Eigen::MatrixXd z = Eigen::MatrixXd::Zero(T, N), zd = Eigen::MatrixXd::Zero(T, N), u(T, 2);
+  for (int i = 0; i < T; ++i) {
+    t(i) = 1e-3 * i;
+    z(i, 3) = 0.01 * std::exp(-t(i));  // first (symmetric) function: tip value ±2 at both ends
+    zd(i, 3) = -z(i, 3);
+    z(i, 2) = 0.5;
+    z(i, 0) = 0.3;
+    z(i, 1) = 0.4;
+    u(i, 0) = 1.0;
+    u(i, 1) = 2.0;
+  }
+  MetricTargets tg;
+  tg.theta_target = 0.2;
+  const ResponseMetrics m = response_metrics(body, t, z, zd, u, tg);
+  CHECK(m.peak_tip_deflection_m == Approx(0.02).epsilon(1e-9));  // |ψ(tip)| = 2 to 1e-9 (theory §2)
+  // 2·0.01·e^{−t} falls below 1% of its peak after ln 100 = 4.6052 s; sampled at 1 ms
+  CHECK(m.tip_settling_time_s == Approx(std::log(100.0)).margin(1e-3));
+  CHECK(m.settled);
+  CHECK(m.final_position_error_m == Approx(0.5).epsilon(1e-14));
+  CHECK(m.final_attitude_error_rad == Approx(0.3).epsilon(1e-14));
+  CHECK(m.control_effort == Approx(5.0 * 8.0).epsilon(1e-12));  // constant u: trapezoid exact
+  CHECK(m.peak_command == 2.0);
+  const Eigen::VectorXd qT = z.row(T - 1).tail(2).transpose(), qdT = zd.row(T - 1).tail(2).transpose();
+  CHECK(m.residual_vibration_energy_J == body.vibration_energy(qT, qdT));
+}

@@ -1,0 +1,292 @@
+// Steady-state and finite-horizon LQR: closed forms (double integrator, scalar Riccati),
+// residuals on random systems, stabilizability diagnosis, optimality of the TV-LQR law
+// (its simulated cost equals the predicted value function and perturbations cost more),
+// and convergence of a long-horizon TV-LQR on the beam at rest to the CARE gain.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <iostream>
+#include <random>
+
+#include "freeflex/control/lqr.hpp"
+#include "freeflex/control/lyapunov.hpp"
+#include "freeflex/control/tvlqr.hpp"
+#include "freeflex/sim/integrator.hpp"
+
+using namespace freeflex;
+using Catch::Matchers::Contains;
+
+namespace {
+
+Eigen::MatrixXd care_residual(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B, const Eigen::MatrixXd& Q,
+                              const Eigen::MatrixXd& R, const Eigen::MatrixXd& P) {
+  return A.transpose() * P + P * A - P * B * R.inverse() * B.transpose() * P + Q;
+}
+
+/// The paper beam (1 m, 1 kg, EI 1, o at the centre) with a torque at o and body-y
+/// thrusters at both tips: the actuators of the control tests.
+FlexibleBody actuated_beam(int noa) {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  return FlexibleBody(beam, noa,
+                      {{"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
+                       {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
+                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
+}
+
+/// The beam held at rest at a fixed attitude: a time-invariant first-order model.
+class RestTrajectory : public RigidTrajectory {
+ public:
+  explicit RestTrajectory(double theta) { s_.pos(2) = theta; }
+  RigidState at(const Instant&) const override { return s_; }
+  double t_begin() const override { return 0.0; }
+  double t_end() const override { return 0.0; }
+  std::vector<double> breakpoints() const override { return {}; }
+
+ private:
+  RigidState s_;
+};
+
+CommandFunction no_commands() {
+  return [](const Instant&, Eigen::Ref<Eigen::VectorXd> c) { c.setZero(); };
+}
+
+}  // namespace
+
+TEST_CASE("Lyapunov solver: random stable A, residual at round-off", "[control]") {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> N01;
+  const int n = 12;
+  Eigen::MatrixXd A(n, n), C(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) A(i, j) = N01(rng), C(i, j) = N01(rng);
+  A -= 5.0 * Eigen::MatrixXd::Identity(n, n);  // shift the spectrum to the left: stable
+  C = C * C.transpose();
+  const Eigen::MatrixXd X = solve_lyapunov(A, C);
+  const double res = (A.transpose() * X + X * A + C).norm() / C.norm();
+  INFO("relative residual " << res);
+  CHECK(res < 1e-13);  // backward-stable Bartels–Stewart on a well-conditioned 12 x 12
+  CHECK((X - X.transpose()).norm() < 1e-12 * X.norm());  // symmetric data, symmetric solution
+}
+
+TEST_CASE("CARE: double integrator closed form P = [[sqrt3, 1], [1, sqrt3]]", "[control]") {
+  Eigen::MatrixXd A(2, 2), B(2, 1), Q = Eigen::MatrixXd::Identity(2, 2), R(1, 1);
+  A << 0, 1, 0, 0;
+  B << 0, 1;
+  R << 1;
+  const CareResult r = solve_care(A, B, Q, R);
+  REQUIRE(r.ok());
+  Eigen::MatrixXd P(2, 2);
+  P << std::sqrt(3.0), 1.0, 1.0, std::sqrt(3.0);
+  INFO("P = \n" << r.P << "\nresidual " << r.residual);
+  CHECK((r.P - P).cwiseAbs().maxCoeff() < 1e-13);  // O(1) entries: round-off only
+  CHECK(r.K(0, 0) == Approx(1.0).epsilon(1e-13));
+  CHECK(r.K(0, 1) == Approx(std::sqrt(3.0)).epsilon(1e-13));
+  CHECK(r.residual < 1e-14);  // Newton polish drives it to round-off
+  // closed loop s^2 + sqrt3 s + 1: both roots at -sqrt3/2 +- i/2
+  for (int i = 0; i < 2; ++i) CHECK(r.closed_loop_eigenvalues(i).real() == Approx(-std::sqrt(3.0) / 2).epsilon(1e-12));
+}
+
+TEST_CASE("CARE: random stabilizable systems, relative residual", "[control]") {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> N01;
+  for (int trial = 0; trial < 5; ++trial) {
+    // Entries N(0, 1/n): spectral radius ~1, about half the eigenvalues unstable; n/3
+    // inputs keep ‖P‖ moderate (with 2 inputs and 10 unstable modes ‖P‖ reaches 1e6 and
+    // the residual relative to ‖Q‖ is set by cancellation in its own evaluation, ~1e-6,
+    // while the normwise residual below stays at round-off).
+    const int n = 10 + 3 * trial, m = n / 3;
+    Eigen::MatrixXd A(n, n), B(n, m), C(n, n), L(m, m);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) A(i, j) = N01(rng) / std::sqrt(double(n)), C(i, j) = N01(rng);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < m; ++j) B(i, j) = N01(rng);
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < m; ++j) L(i, j) = N01(rng);
+    const Eigen::MatrixXd Q = C.topRows(n / 2).transpose() * C.topRows(n / 2);  // rank n/2: PSD, singular
+    const Eigen::MatrixXd R = L * L.transpose() + Eigen::MatrixXd::Identity(m, m);
+    const CareResult r = solve_care(A, B, Q, R);
+    REQUIRE(r.ok());
+    const double res = care_residual(A, B, Q, R, r.P).norm() / Q.norm();
+    INFO("n " << n << ", m " << m << ": reported residual " << r.residual << ", recomputed " << res
+              << ", before Newton " << r.residual_before_newton << ", Newton iterations " << r.newton_iterations
+              << ", normwise " << r.residual_normwise << ", |P| " << r.P.norm());
+    std::cout << "[control] random CARE n " << n << ", m " << m << ": residual/|Q| " << res << ", normwise "
+              << r.residual_normwise << "\n";
+    CHECK(res < 1e-10);  // the brief asks 1e-9; measured 1e-12..5e-11 (‖P‖ ~ 10..1e3 ‖Q‖)
+    CHECK(r.residual < 1e-10);
+    CHECK(r.residual_normwise < 1e-12);  // backward stable: measured <= 1e-13, i.e. ~20 n ε
+    CHECK(r.closed_loop_eigenvalues.real().maxCoeff() < 0.0);  // stabilizing
+    CHECK(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(r.P).eigenvalues().minCoeff() > -1e-10 * r.P.norm());
+  }
+}
+
+TEST_CASE("CARE: stabilizability and detectability are diagnosed", "[control]") {
+  SECTION("unstable uncontrollable mode") {
+    Eigen::MatrixXd A(2, 2), B(2, 1), Q = Eigen::MatrixXd::Identity(2, 2), R = Eigen::MatrixXd::Identity(1, 1);
+    A << 1, 0, 0, -1;
+    B << 0, 1;
+    const CareResult r = solve_care(A, B, Q, R);
+    CHECK(r.status == CareResult::Status::NotStabilizable);
+    CHECK_THAT(r.message, Contains("not stabilizable"));
+    CHECK(r.uncontrollable_dimension == 1);
+    CareOptions o;
+    o.restrict_to_controllable = true;
+    const CareResult rr = solve_care(A, B, Q, R, o);
+    REQUIRE(rr.ok());
+    CHECK(rr.P(0, 0) == 0.0);                                   // the mode is left alone
+    CHECK(rr.P(1, 1) == Approx(-1.0 + std::sqrt(2.0)).epsilon(1e-12));  // scalar CARE -2p - p^2 + 1 = 0
+  }
+  SECTION("undamped oscillator with Q = 0: eigenvalues on the imaginary axis") {
+    Eigen::MatrixXd A(2, 2), B(2, 1), Q = Eigen::MatrixXd::Zero(2, 2), R = Eigen::MatrixXd::Identity(1, 1);
+    A << 0, 1, -1, 0;
+    B << 0, 1;
+    const CareResult r = solve_care(A, B, Q, R);
+    CHECK(r.status == CareResult::Status::NoStabilizingSolution);
+    CHECK_THAT(r.message, Contains("imaginary axis"));
+  }
+}
+
+TEST_CASE("TV-LQR: scalar Riccati closed form", "[control]") {
+  // x' = a x + b u: dp/dτ = 2 a p − (b²/r) p² + q has roots p± and
+  // (p − p+)/(p − p−) = (pf − p+)/(pf − p−) exp(−(b²/r)(p+ − p−) τ).
+  const double a = 0.7, b = 1.3, q = 2.0, r = 0.5, pf = 3.0, T = 1.5;
+  LtvSystem sys;
+  sys.state_size = 1;
+  sys.input_size = 1;
+  sys.state_space = [&](const Instant&, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g) {
+    A = Eigen::MatrixXd::Constant(1, 1, a);
+    B = Eigen::MatrixXd::Constant(1, 1, b);
+    g = Eigen::VectorXd::Zero(1);
+  };
+  TvlqrOptions o;
+  o.t0 = 0.0;
+  o.tf = T;
+  o.Q = Eigen::MatrixXd::Constant(1, 1, q);
+  o.R = Eigen::MatrixXd::Constant(1, 1, r);
+  o.Qf = Eigen::MatrixXd::Constant(1, 1, pf);
+  o.rtol = 1e-11;
+  o.atol = 1e-13;
+  o.store_riccati = true;
+  const TvlqrResult res = solve_tvlqr(sys, o);
+  REQUIRE(res.ok());
+  const double k = b * b / r, disc = std::sqrt(a * a + k * q);
+  const double pp = (a + disc) / k, pm = (a - disc) / k;
+  double worst = 0.0;
+  for (std::size_t i = 0; i < res.t.size(); ++i) {
+    const double tau = T - res.t[i];
+    const double e = (pf - pp) / (pf - pm) * std::exp(-k * (pp - pm) * tau);
+    const double p = (pp - e * pm) / (1.0 - e);
+    worst = std::max(worst, std::abs(res.P[i](0, 0) - p) / p);
+    CHECK(res.K[i](0, 0) == Approx(b * res.P[i](0, 0) / r).epsilon(1e-14));  // K = R⁻¹ Bᵀ P exactly
+  }
+  INFO("max relative error of P over the grid: " << worst << " (" << res.steps << " steps)");
+  CHECK(worst < 1e-8);  // rtol 1e-11 with ~100 steps: global error ~1e-9
+  CHECK(res.s0.norm() == 0.0);  // no forcing: no feedforward
+}
+
+TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value; perturbations cost more",
+          "[control]") {
+  // Two states, one input, A(t), B(t), g(t) smooth with one breakpoint where g jumps.
+  LtvSystem sys;
+  sys.state_size = 2;
+  sys.input_size = 1;
+  sys.breakpoints = {0.8};
+  auto model = [](const Instant& at, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g) {
+    const double t = at.t;
+    A.resize(2, 2);
+    A << 0.0, 1.0, -4.0 - std::sin(3.0 * t), -0.1;
+    B.resize(2, 1);
+    B << 0.0, 1.0 + 0.3 * std::cos(2.0 * t);
+    g.resize(2);
+    g << 0.0, at.piece_mid < 0.8 ? 2.0 : -1.0;
+  };
+  sys.state_space = model;
+  TvlqrOptions o;
+  o.t0 = 0.0;
+  o.tf = 2.0;
+  o.Q = Eigen::Matrix2d::Identity() * 3.0;
+  o.R = Eigen::MatrixXd::Constant(1, 1, 0.2);
+  o.Qf = Eigen::Matrix2d::Identity() * 5.0;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  o.grid_step_s = 5e-4;
+  const TvlqrResult law = solve_tvlqr(sys, o);
+  REQUIRE(law.ok());
+  const Eigen::Vector2d x0(0.4, -0.3);
+
+  // closed-loop cost with u = law + eps * sin(5t), state [x, running cost]
+  auto cost = [&](double eps) {
+    OdeSystem ode;
+    ode.dim = 3;
+    ode.rhs = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& z, Eigen::Ref<Eigen::VectorXd> zd) {
+      Eigen::MatrixXd A, B;
+      Eigen::VectorXd g;
+      model(at, A, B, g);
+      const Eigen::Vector2d x = z.head<2>();
+      Eigen::VectorXd u = law.control(at.t, x);
+      u(0) += eps * std::sin(5.0 * at.t);
+      zd.head<2>() = A * x + B * u + g;
+      zd(2) = x.dot(o.Q * x) + u.dot(o.R * u);
+      return true;
+    };
+    IntegratorOptions io;
+    io.rtol = 1e-11;
+    io.atol = 1e-13;
+    Eigen::Vector3d z0(x0(0), x0(1), 0.0);
+    const IntegrationResult ir = integrate(ode, z0, {0.0, 2.0}, {0.8}, io);
+    REQUIRE(ir.ok);
+    const Eigen::Vector2d xf = ir.x.row(1).head<2>().transpose();
+    return ir.x(1, 2) + xf.dot(*o.Qf * xf);
+  };
+  const double predicted = law.predicted_cost(x0), J0 = cost(0.0);
+  INFO("predicted " << predicted << ", simulated " << J0 << ", s0 = " << law.s0.transpose() << ", c0 = " << law.c0);
+  CHECK(std::abs(J0 - predicted) < 1e-6 * predicted);  // linear gain interpolation at 0.5 ms: ~1e-7
+  CHECK(law.s0.norm() > 0.1);  // the forcing is felt
+  for (double eps : {0.05, -0.05}) CHECK(cost(eps) > J0 + 1e-5);  // second-order increase ~ eps² ∫sin² R ~ 5e-4
+}
+
+TEST_CASE("TV-LQR on the beam at rest converges to the steady-state LQR gain", "[control]") {
+  const int noa = GENERATE(4, 6);
+  const FlexibleBody body = actuated_beam(noa);
+  const RestTrajectory rest(0.4);
+  const FirstOrderModel model(body, rest, no_commands(), {0, 1, 2});
+  const Eigen::MatrixXd Q = vibration_weight(body, 1.0, 100.0, 10.0);
+  const Eigen::MatrixXd R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
+  Eigen::MatrixXd A, B;
+  Eigen::VectorXd g;
+  model.state_space(Instant::at(0.0), A, B, g);
+
+  // Body-y thrusters and a torque cannot push the beam along its axis: that double
+  // integrator is uncontrollable, so the CARE has no stabilizing solution ...
+  const CareResult plain = solve_care(A, B, Q, R);
+  CHECK(plain.status == CareResult::Status::NotStabilizable);
+  CHECK(plain.uncontrollable_dimension == 2);
+  // ... and is solved on the controllable subspace.
+  CareOptions co;
+  co.restrict_to_controllable = true;
+  const CareResult care = solve_care(A, B, Q, R, co);
+  REQUIRE(care.ok());
+  std::cout << "[control] NOA " << noa << ": CARE relative residual " << care.residual << " (Schur alone "
+            << care.residual_before_newton << ", " << care.newton_iterations << " Newton), uncontrollable dim "
+            << care.uncontrollable_dimension << "\n";
+  CHECK(care.residual < 1e-9);  // the brief's bound
+
+  TvlqrOptions o;
+  o.t0 = 0.0;
+  o.tf = 25.0;
+  o.Q = Q;
+  o.R = R;
+  o.Qf = Eigen::MatrixXd::Zero(Q.rows(), Q.cols());  // far from the CARE solution: convergence must happen
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  o.grid_step_s = 0.5;
+  const TvlqrResult law = solve_tvlqr(model, o);
+  REQUIRE(law.ok());
+  const double err0 = (law.K.front() - care.K).norm() / care.K.norm();
+  const double err_end = (law.K.back() - care.K).norm() / care.K.norm();
+  std::cout << "[control] NOA " << noa << ": TV-LQR gain at t0 vs CARE, relative " << err0 << " (at tf " << err_end
+            << "); " << law.steps << " steps, " << law.linear_iterations << " GMRES iterations, "
+            << law.wall_time_s << " s\n";
+  CHECK(err0 < 1e-6);   // the brief's bound
+  CHECK(err_end > 0.5);  // Qf = 0: the gain starts far away (the test could fail)
+}
