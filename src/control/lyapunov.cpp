@@ -1,6 +1,7 @@
 #include "freeflex/control/lyapunov.hpp"
 
 #include <cfloat>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -12,13 +13,35 @@ namespace {
 using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 4>;
 using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 4, 1>;
 
-/// Solves the (at most 4 x 4) system M v = b; false if M is singular to `tiny`.
-bool small_solve(const Small& M, const SmallVec& b, SmallVec& v, double tiny) {
-  const Eigen::FullPivLU<Small> lu(M);
-  const double min_pivot = lu.matrixLU().diagonal().cwiseAbs().minCoeff();
-  if (!(min_pivot > tiny)) return false;
-  v = lu.solve(b);
+template <int K>
+bool fixed_solve(const Small& M, const SmallVec& b, SmallVec& v, double tiny) {
+  const Eigen::Matrix<double, K, K> Mk = M;
+  const Eigen::PartialPivLU<Eigen::Matrix<double, K, K>> lu(Mk);
+  if (!(lu.matrixLU().diagonal().cwiseAbs().minCoeff() > tiny)) return false;
+  v = lu.solve(Eigen::Matrix<double, K, 1>(b));
   return true;
+}
+
+/// Solves the 1, 2 or 4 dimensional system M v = b (fixed sizes: this is the inner loop
+/// of every Lyapunov solve); false if M is singular to `tiny`.
+bool small_solve(const Small& M, const SmallVec& b, SmallVec& v, double tiny) {
+  switch (M.rows()) {
+    case 1:
+      if (!(std::abs(M(0, 0)) > tiny)) return false;
+      v.resize(1);
+      v(0) = b(0) / M(0, 0);
+      return true;
+    case 2:
+      return fixed_solve<2>(M, b, v, tiny);
+    case 4:
+      return fixed_solve<4>(M, b, v, tiny);
+    default: {
+      const Eigen::FullPivLU<Small> lu(M);
+      if (!(lu.matrixLU().diagonal().cwiseAbs().minCoeff() > tiny)) return false;
+      v = lu.solve(b);
+      return true;
+    }
+  }
 }
 
 }  // namespace

@@ -547,7 +547,9 @@ SwitchTimeResult design_switch_times(const FlexibleBody& body, const SwitchTimeO
   StageResult fin = best;
   if (P.k > 0) {
     for (std::size_t i = 0; i < roots.size() && i < 6; ++i) {
-      fin = newton_first_order(P, roots[i].D, o.constraint_tolerance, 12);
+      fin = o.refine == SwitchTimeOptions::Refine::Newton
+                ? newton_first_order(P, roots[i].D, o.constraint_tolerance, 12)
+                : run_slsqp(P, false, roots[i].D, o.constraint_tolerance, o.max_evaluations);
       if (fin.feasible) {
         best = roots[i];
         break;

@@ -1,5 +1,5 @@
-// TV-LQR: backward Riccati, feedforward and cost-to-go by CVODES BDF with a GMRES
-// linear solver preconditioned by exact Lyapunov solves (see the header for why).
+// TV-LQR: backward Riccati, feedforward and cost-to-go by CVODES BDF whose Newton systems
+// are solved by exact Lyapunov solves for a frozen closed loop (see the header for why).
 #include "freeflex/control/tvlqr.hpp"
 
 #include <cvodes/cvodes.h>
@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -27,6 +26,19 @@ std::string fmt(double v) {
   os.precision(10);
   os << v;
   return os.str();
+}
+
+/// The state stores the upper triangle of the symmetric P̂ column by column, then ŝ, then ĉ.
+int tri_size(int n) { return n * (n + 1) / 2; }
+void unpack(const double* y, int n, Eigen::MatrixXd& P) {
+  P.resize(n, n);
+  for (int j = 0, k = 0; j < n; ++j)
+    for (int i = 0; i <= j; ++i, ++k) P(i, j) = P(j, i) = y[k];
+}
+void pack(const Eigen::MatrixXd& F, double* out) {
+  const int n = static_cast<int>(F.rows());
+  for (int j = 0, k = 0; j < n; ++j)
+    for (int i = 0; i <= j; ++i, ++k) out[k] = i == j ? F(i, i) : 0.5 * (F(i, j) + F(j, i));
 }
 
 /// Everything the CVODES callbacks need; no exception leaves a callback.
@@ -52,7 +64,7 @@ struct RiccatiData {
   bool have_pre = false;
   long setups = 0;
 
-  Eigen::MatrixXd PB, BP, Kh, AtP, Z;  // scratch
+  Eigen::MatrixXd PB, BP, Kh, AtP, Z, Pf, F, Vf;  // scratch
   Eigen::VectorXd v, zs;
 
   bool failed = false;
@@ -85,8 +97,9 @@ struct RiccatiData {
 
   /// A_cl = A − σ B R⁻¹ Bᵀ P̂ and w = g − σ B R⁻¹ Bᵀ ŝ at state y.
   void closed_loop(const double* y, Eigen::MatrixXd& Acl, Eigen::VectorXd& w) {
-    Eigen::Map<const Eigen::MatrixXd> P(y, n, n);
-    Eigen::Map<const Eigen::VectorXd> s(y + n * n, n);
+    unpack(y, n, Pf);
+    const Eigen::MatrixXd& P = Pf;
+    Eigen::Map<const Eigen::VectorXd> s(y + tri_size(n), n);
     Kh.noalias() = B.transpose() * P;
     Rllt.solveInPlace(Kh);
     Acl = A;
@@ -108,20 +121,22 @@ extern "C" int freeflex_riccati_rhs(sunrealtype tau, N_Vector yv, N_Vector ydv, 
     const int n = d->n;
     const double* y = N_VGetArrayPointer(yv);
     double* yd = N_VGetArrayPointer(ydv);
-    Eigen::Map<const Eigen::MatrixXd> P(y, n, n);
-    Eigen::Map<const Eigen::VectorXd> s(y + n * n, n);
-    Eigen::Map<Eigen::MatrixXd> F(yd, n, n);
-    Eigen::Map<Eigen::VectorXd> ds(yd + n * n, n);
+    const int nt = tri_size(n);
+    unpack(y, n, d->Pf);
+    const Eigen::MatrixXd& P = d->Pf;
+    Eigen::Map<const Eigen::VectorXd> s(y + nt, n);
+    Eigen::MatrixXd& F = d->F;
+    Eigen::Map<Eigen::VectorXd> ds(yd + nt, n);
     // dP̂/dτ = Aᵀ P̂ + P̂ A − σ P̂ B R⁻¹ Bᵀ P̂ + Q/σ
     d->BP.noalias() = d->B.transpose() * P;
     d->Kh = d->BP;
     d->Rllt.solveInPlace(d->Kh);
     d->PB.noalias() = P * d->B;
     d->AtP.noalias() = d->A.transpose() * P;
-    F = d->AtP;
-    F.noalias() += P * d->A;
+    F = d->AtP + d->AtP.transpose();  // P symmetric: P A = (Aᵀ P)ᵀ
     F.noalias() -= d->sigma * d->PB * d->Kh;
     F += d->Qs;
+    pack(F, yd);
     // dŝ/dτ = (A − σ S P̂)ᵀ ŝ + P̂ g ;  dĉ/dτ = 2 ŝᵀ g − σ ŝᵀ S ŝ
     d->v.noalias() = d->B.transpose() * s;
     const Eigen::VectorXd Bs = d->v;
@@ -129,7 +144,7 @@ extern "C" int freeflex_riccati_rhs(sunrealtype tau, N_Vector yv, N_Vector ydv, 
     ds.noalias() = d->A.transpose() * s;
     ds.noalias() -= d->sigma * d->BP.transpose() * d->v;
     ds.noalias() += P * d->g;
-    yd[n * n + n] = 2.0 * s.dot(d->g) - d->sigma * Bs.dot(d->v);
+    yd[nt + n] = 2.0 * s.dot(d->g) - d->sigma * Bs.dot(d->v);
     return 0;
   } catch (const std::exception& e) {
     d->fail(std::string("Riccati right-hand side threw: ") + e.what());
@@ -159,15 +174,16 @@ extern "C" int freeflex_riccati_jtimes(N_Vector vv, N_Vector Jvv, sunrealtype, N
     const int n = d->n;
     const double* v = N_VGetArrayPointer(vv);
     double* Jv = N_VGetArrayPointer(Jvv);
-    Eigen::Map<const Eigen::MatrixXd> V(v, n, n);
-    Eigen::Map<const Eigen::VectorXd> vs(v + n * n, n);
-    Eigen::Map<Eigen::MatrixXd> JV(Jv, n, n);
-    Eigen::Map<Eigen::VectorXd> Jvs(Jv + n * n, n);
-    JV.noalias() = d->Acl_j.transpose() * V;
-    JV.noalias() += V * d->Acl_j;
+    const int nt = tri_size(n);
+    unpack(v, n, d->Vf);
+    const Eigen::MatrixXd& V = d->Vf;
+    Eigen::Map<const Eigen::VectorXd> vs(v + nt, n);
+    Eigen::Map<Eigen::VectorXd> Jvs(Jv + nt, n);
+    d->F.noalias() = d->Acl_j.transpose() * V;
+    pack(d->F + d->F.transpose(), Jv);  // Aclᵀ V + V Acl for symmetric V
     Jvs.noalias() = d->Acl_j.transpose() * vs;
     Jvs.noalias() += V * d->w_j;
-    Jv[n * n + n] = 2.0 * d->w_j.dot(vs);
+    Jv[nt + n] = 2.0 * d->w_j.dot(vs);
     return 0;
   } catch (...) {
     d->fail("Jacobian-vector product threw");
@@ -203,16 +219,16 @@ extern "C" int freeflex_riccati_psetup(sunrealtype tau, N_Vector yv, N_Vector, s
 /// z = (I − γJ)⁻¹ r with J frozen at the last setup: Z − γ(A_clᵀ Z + Z A_cl) = R_P, then
 /// the s and c rows (block lower triangular). Returns 0, or 1 (recoverable) if singular.
 int frozen_newton_solve(RiccatiData* d, const double* r, double* z, double gamma) {
-  const int n = d->n;
-  Eigen::Map<const Eigen::MatrixXd> RP(r, n, n);
-  Eigen::Map<const Eigen::VectorXd> rs(r + n * n, n);
-  if (!d->lyap.solve(-RP / gamma, -0.5 / gamma, d->Z)) return 1;
+  const int n = d->n, nt = tri_size(n);
+  unpack(r, n, d->Vf);
+  Eigen::Map<const Eigen::VectorXd> rs(r + nt, n);
+  if (!d->lyap.solve(-d->Vf / gamma, -0.5 / gamma, d->Z)) return 1;
   const Eigen::VectorXd rhs_s = -(rs + gamma * d->Z * d->w_p) / gamma;
   if (!d->lyap.solve_transposed(rhs_s, -1.0 / gamma, d->zs)) return 1;
-  const double zc = r[n * n + n] + 2.0 * gamma * d->w_p.dot(d->zs);
-  Eigen::Map<Eigen::MatrixXd>(z, n, n) = d->Z;
-  Eigen::Map<Eigen::VectorXd>(z + n * n, n) = d->zs;
-  z[n * n + n] = zc;
+  const double zc = r[nt + n] + 2.0 * gamma * d->w_p.dot(d->zs);
+  pack(d->Z, z);
+  Eigen::Map<Eigen::VectorXd>(z + nt, n) = d->zs;
+  z[nt + n] = zc;
   return 0;
 }
 
@@ -442,28 +458,29 @@ TvlqrResult solve_tvlqr(const LtvSystem& sys, const TvlqrOptions& o) {
   res.feedforward.setZero(G, m);
   if (o.store_riccati) res.P.assign(G, Eigen::MatrixXd());
 
-  const int dim = n * n + n + 1;
+  const int nt = tri_size(n), dim = nt + n + 1;
   Cvodes cv;
   if (SUNContext_Create(nullptr, &cv.ctx) != 0) throw std::runtime_error("solve_tvlqr: SUNContext_Create failed");
   cv.y = N_VNew_Serial(dim, cv.ctx);
   if (!cv.y) throw std::runtime_error("solve_tvlqr: N_VNew_Serial failed");
   double* y = N_VGetArrayPointer(cv.y);
   Eigen::Map<Eigen::VectorXd>(y, dim).setZero();
-  Eigen::Map<Eigen::MatrixXd>(y, n, n) = res.Qf / d.sigma;
+  pack(res.Qf / d.sigma, y);
 
   auto record = [&](int idx) -> bool {
     const double t = grid[idx];
     if (!d.eval(t)) return false;
-    Eigen::Map<const Eigen::MatrixXd> Ph(y, n, n);
-    Eigen::Map<const Eigen::VectorXd> sh(y + n * n, n);
-    const Eigen::MatrixXd Psym = 0.5 * d.sigma * (Ph + Ph.transpose());
+    Eigen::MatrixXd Psym;
+    unpack(y, n, Psym);
+    Psym *= d.sigma;
+    Eigen::Map<const Eigen::VectorXd> sh(y + nt, n);
     res.K[idx] = d.Rllt.solve(d.B.transpose() * Psym);
     res.feedforward.row(idx) = (-d.sigma * d.Rllt.solve(d.B.transpose() * sh)).transpose();
     if (o.store_riccati) res.P[idx] = Psym;
     if (idx == 0) {
       res.P0 = Psym;
       res.s0 = d.sigma * sh;
-      res.c0 = d.sigma * y[n * n + n];
+      res.c0 = d.sigma * y[nt + n];
     }
     return true;
   };

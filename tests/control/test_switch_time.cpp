@@ -75,3 +75,22 @@ TEST_CASE("ZV and ZVD shapers cancel a single mode", "[control]") {
   }
   CHECK(zv_shaper(w).times[1] == Approx(M_PI / w).epsilon(1e-15));
 }
+
+TEST_CASE("switch-time design: SLSQP refinement reaches Newton's design (k = 1)", "[control]") {
+  const FlexibleBody body = torque_beam();
+  SwitchTimeOptions o;
+  o.actuator = 0;
+  o.modes = 1;
+  const SwitchTimeResult newton = design_switch_times(body, o);
+  o.refine = SwitchTimeOptions::Refine::Slsqp;
+  o.max_evaluations = 40;
+  const SwitchTimeResult slsqp = design_switch_times(body, o);
+  REQUIRE(newton.ok());
+  INFO(slsqp.message);
+  REQUIRE(slsqp.ok());
+  std::cout << "[control] k = 1 by SLSQP: T = " << slsqp.duration_s << " s, residual ratio " << slsqp.residual_ratio
+            << ", " << slsqp.simulations << " simulations\n";
+  CHECK(slsqp.residual_ratio < 1e-9);
+  CHECK(slsqp.duration_s == Approx(newton.duration_s).epsilon(1e-7));  // one root, both to constraint tolerance
+  for (int i = 0; i < 3; ++i) CHECK(slsqp.switch_times[i] == Approx(newton.switch_times[i]).epsilon(1e-6));
+}

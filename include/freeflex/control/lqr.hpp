@@ -10,9 +10,11 @@
 //
 // Free-free beams have rigid-body modes (double integrators). Transverse thrusters and
 // torques cannot move the body along its own axis x, so with Q weighting R1 the pair
-// (A, B) is not stabilizable and no stabilizing solution exists. `restrict_to_controllable`
-// then solves the CARE on the controllable subspace (orthogonal block-Krylov staircase)
-// and leaves the uncontrollable modes with zero gain; the result says so.
+// (A, B) is not stabilizable and no stabilizing solution exists. The uncontrollable modes
+// that are not asymptotically stable are found cluster by cluster (each cluster of
+// non-stable eigenvalues split off by a reordered Schur form of the balanced Aᵀ, then a
+// dual PBH staircase on that small block); `restrict_to_controllable` then solves the
+// CARE on the A-invariant complement of those modes and leaves them with zero gain.
 #include <complex>
 #include <string>
 
@@ -23,11 +25,11 @@
 namespace freeflex {
 
 struct CareOptions {
-  /// Solve on the controllable subspace when uncontrollable modes are not asymptotically
-  /// stable (otherwise such a problem ends with Status::NotStabilizable).
+  /// Solve without the uncontrollable modes that are not asymptotically stable (otherwise
+  /// such a problem ends with Status::NotStabilizable).
   bool restrict_to_controllable = false;
-  /// Rank tolerance of the controllability staircase, relative to ‖B‖ and ‖A‖ (after
-  /// diagonal balancing of A).
+  /// Rank tolerance of the per-cluster staircase, relative to ‖B‖ and ‖A‖ (after diagonal
+  /// balancing of A).
   double controllability_tolerance = 1e-10;
   /// Hamiltonian eigenvalues with |Re λ| <= this times |λ| (plus 1e3 ε ‖H‖) count as
   /// imaginary: no stabilizing solution.
@@ -47,15 +49,15 @@ struct CareResult {
   Eigen::MatrixXd P;                       ///< n x n, symmetric
   Eigen::MatrixXd K;                       ///< m x n, R⁻¹ Bᵀ P
   Eigen::VectorXcd closed_loop_eigenvalues;  ///< of A − B K (uncontrollable ones included)
-  /// ‖Vᵀ(Aᵀ P + P A − P S P + Q)V‖_F / ‖VᵀQV‖_F with V the (controllable) subspace solved
-  /// on (the identity when not reduced); divided by ‖P S P‖_F instead when VᵀQV = 0.
+  /// ‖Vᵀ(Aᵀ P + P A − P S P + Q)V‖_F / ‖VᵀQV‖_F with V the subspace solved on (the
+  /// identity when not reduced); divided by ‖P S P‖_F instead when VᵀQV = 0.
   double residual = 0.0;
   double residual_before_newton = 0.0;     ///< the same after the Schur step alone
   /// Normwise backward residual ‖Res‖_F / (‖Q‖_F + 2‖AᵀP‖_F + ‖PSP‖_F): round-off level
   /// (~n ε) whenever the method worked, even when ‖P‖ ≫ ‖Q‖ makes `residual` large.
   double residual_normwise = 0.0;
   int newton_iterations = 0;
-  int uncontrollable_dimension = 0;        ///< n minus the controllable subspace's dimension
+  int uncontrollable_dimension = 0;        ///< uncontrollable modes with Re λ >= −δ (not asymptotically stable)
   Eigen::VectorXcd uncontrollable_eigenvalues;
   bool ok() const { return status == Status::Solved; }
 };

@@ -20,7 +20,10 @@
 //     oscillator with residual amplitude ∝ |Σ_i c_i e^{iω t_i}| (c_i the torque jumps);
 //     analytic gradients, multi-start, the shortest feasible design kept;
 //  2. the first-order model itself (θ0'² softening and all couplings), simulated with
-//     CVODES for every evaluation, gradients by central differences, started from 1.
+//     CVODES for every evaluation, gradients by forward differences, started from the
+//     closed-form roots in order of duration until one carries over (the shortest
+//     closed-form root need not survive the softening): Newton's method on the square
+//     system by default, or SLSQP.
 // The residual energy reported is that of the first-order simulation at T.
 #include <string>
 #include <vector>
@@ -66,7 +69,11 @@ struct SwitchTimeOptions {
   /// E_j / E_rigid ~ 1e-14.
   double constraint_tolerance = 1e-7;
   int starts = 24;                 ///< multi-start count of the closed-form stage
-  int max_evaluations = 200;       ///< SLSQP iterations per stage
+  int max_evaluations = 200;       ///< SLSQP evaluations per run
+  /// Stage 2: Newton's method on the square system (forward-difference Jacobian, ~70
+  /// simulations for k = 1) or NLopt SLSQP with the same gradients (minimizing T under
+  /// the equality constraints; about three times the simulations).
+  enum class Refine { Newton, Slsqp } refine = Refine::Newton;
 };
 
 struct SwitchTimeResult {
