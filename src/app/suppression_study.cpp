@@ -208,7 +208,7 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   Json table = Json::array();
   PlotSpec fig{st.figure, "Vibration suppression: " + design.title,
                {{"tip deflection (right end)", "t [s]", "deflection [m]", {}},
-                {"vibration energy", "t [s]", "E_vib [J]", {}}}};
+                {"vibration energy (log scale: feedback leaves orders of magnitude less)", "t [s]", "E_vib [J]", {}, true}}};
   const Eigen::RowVectorXd phi_l = body.basis().value(body.beam().x_left());
   const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
   const int n = body.n();

@@ -120,14 +120,15 @@ std::optional<ForceElement> read_element(Section& s, double length, bool& ok) {
     s.number_array("direction", Range(), false);
     s.boolean("follow_slope", false);
   } else {
-    auto dir = s.number_array("direction", Range(), true);
-    if (dir && dir->size() != 2) {
-      s.problem("direction", s.key_path("direction") + " must have two components [x, y], got " +
-                                 std::to_string(dir->size()));
-      dir.reset();
+    const auto dir = s.number_array("direction", Range(), true);
+    if (dir && dir->size() == 2) {
+      e.direction = Eigen::Vector2d((*dir)[0], (*dir)[1]);
+    } else {
+      if (dir)
+        s.problem("direction", s.key_path("direction") + " must have two components [x, y], got " +
+                                   std::to_string(dir->size()));
+      ok = false;
     }
-    if (dir) e.direction = Eigen::Vector2d((*dir)[0], (*dir)[1]);
-    else ok = false;
     if (type && *type == "force" && s.has("follow_slope"))
       s.problem("follow_slope", s.key_path("follow_slope") + " applies to thrusters only");
     e.follow_slope = s.boolean("follow_slope", false).value_or(false);

@@ -42,6 +42,7 @@ std::string render_plot(const PlotSpec& spec, const std::string& dir) {
     gp << "set title " << quoted(spec.title) << "\n";
   for (const auto& p : spec.panels) {
     if (panels > 1) gp << "set title " << quoted(p.title) << "\n";
+    gp << (p.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '% h'\n");
     gp << "set xlabel " << quoted(p.xlabel) << "\nset ylabel " << quoted(p.ylabel) << "\nplot ";
     for (std::size_t i = 0; i < p.series.size(); ++i) {
       const auto& s = p.series[i];

@@ -17,6 +17,7 @@ struct PlotSeries {
 struct PlotPanel {
   std::string title, xlabel, ylabel;
   std::vector<PlotSeries> series;
+  bool log_y = false;  ///< logarithmic y axis (points <= 0 are left out by gnuplot)
 };
 
 struct PlotSpec {
