@@ -14,6 +14,7 @@
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/io/plot.hpp"
 #include "freeflex/sim/simulate.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 namespace {
@@ -25,12 +26,7 @@ struct Case {
   double saturated_fraction = 0.0;
 };
 
-std::string num(double v) {
-  if (std::isnan(v)) return "";
-  std::ostringstream os;
-  os << std::setprecision(10) << v;
-  return os.str();
-}
+std::string num(double v) { return std::isnan(v) ? "" : util::format_number(v, 10); }
 
 /// Element commands at the output times: the loads' profiles plus the given actuator
 /// commands (columns in the order of `actuators`).

@@ -8,16 +8,12 @@
 #include <stdexcept>
 
 #include "freeflex/dynamics/full_model.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
+std::string fmt(double v) { return util::format_number(v, 10); }
 
 /// The control law with saturation, shared by both simulations.
 struct Law {

@@ -9,16 +9,12 @@
 #include <Eigen/Eigenvalues>
 
 #include "freeflex/control/lyapunov.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(6);
-  os << v;
-  return os.str();
-}
+std::string fmt(double v) { return util::format_number(v, 6); }
 
 std::string fmt(std::complex<double> v) {
   std::ostringstream os;

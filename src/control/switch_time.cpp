@@ -13,16 +13,12 @@
 
 #include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/sim/integrator.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
+std::string fmt(double v) { return util::format_number(v, 10); }
 
 void validate_actuator(const FlexibleBody& body, int actuator, const std::string& where) {
   const int ne = static_cast<int>(body.elements().size());

@@ -1,6 +1,7 @@
 // ODE integration with SUNDIALS CVODES 6.x, cut into pieces at breakpoints
 // (docs/theory.md section 8).
 #include "freeflex/sim/integrator.hpp"
+#include "util/format.hpp"
 
 #include <cvodes/cvodes.h>
 #include <nvector/nvector_serial.h>
@@ -25,12 +26,7 @@ namespace {
 
 static_assert(sizeof(sunrealtype) == sizeof(double), "freeflex needs SUNDIALS built with double precision");
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(12);
-  os << v;
-  return os.str();
-}
+std::string fmt(double v) { return util::format_number(v, 12); }
 
 /// Everything SUNDIALS allocates, freed in reverse order of creation on every path.
 struct CvodeResources {

@@ -1,4 +1,5 @@
 #include "freeflex/trajopt/problem.hpp"
+#include "util/format.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -8,12 +9,7 @@ namespace freeflex {
 
 namespace {
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
+std::string num(double v) { return util::format_number(v, 10); }
 
 std::string item(const std::string& name, int k) { return name + "[" + std::to_string(k) + "]"; }
 
