@@ -94,7 +94,23 @@ std::vector<double> cuts_within(std::vector<double> b, double a, double e) {
   return out;
 }
 
-void saturation_stats(ClosedLoopResult& r, const Eigen::VectorXd& limits) {
+/// The integration's status and times, with room for the m commands at each output.
+ClosedLoopResult start_result(const IntegrationResult& ir, int m) {
+  ClosedLoopResult r;
+  r.ok = ir.ok;
+  r.message = ir.ok ? "" : ir.message;
+  r.t = ir.t;
+  r.commands.resize(ir.t.size(), m);
+  r.demanded.resize(ir.t.size(), m);
+  return r;
+}
+
+/// Saturation statistics of the filled-in commands, the integrator's counters, wall time.
+void finish_result(ClosedLoopResult& r, const IntegrationResult& ir, const Eigen::VectorXd& limits,
+                   std::chrono::steady_clock::time_point clock0) {
+  r.rhs_evaluations = ir.rhs_evaluations;
+  r.steps = ir.steps;
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
   const int T = static_cast<int>(r.commands.rows()), m = static_cast<int>(r.commands.cols());
   r.saturated_fraction_per_actuator = Eigen::VectorXd::Zero(m);
   r.peak_command = T ? r.commands.cwiseAbs().maxCoeff() : 0.0;
@@ -174,15 +190,10 @@ ClosedLoopResult simulate_closed_loop_first_order(const FirstOrderModel& model, 
   const Eigen::VectorXd x0 = o.x1_initial.size() ? o.x1_initial : Eigen::VectorXd::Zero(nx);
   const IntegrationResult ir = integrate(sys, x0, w.outputs, cuts_within(bp, w.a, w.b), o.integrator);
 
-  ClosedLoopResult r;
-  r.ok = ir.ok;
-  r.message = ir.ok ? "" : ir.message;
-  r.t = ir.t;
+  ClosedLoopResult r = start_result(ir, m);
   const int T = static_cast<int>(ir.t.size());
   r.z.resize(T, N);
   r.z_dot.resize(T, N);
-  r.commands.resize(T, m);
-  r.demanded.resize(T, m);
   for (int i = 0; i < T; ++i) {
     const Instant at = Instant::at(ir.t(i));
     const RigidState s = nom.at(at);
@@ -196,10 +207,7 @@ ClosedLoopResult simulate_closed_loop_first_order(const FirstOrderModel& model, 
     r.commands.row(i) = app.transpose();
     r.demanded.row(i) = dem.transpose();
   }
-  saturation_stats(r, o.limits);
-  r.rhs_evaluations = ir.rhs_evaluations;
-  r.steps = ir.steps;
-  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+  finish_result(r, ir, o.limits, clock0);
   return r;
 }
 
@@ -261,25 +269,17 @@ ClosedLoopResult simulate_closed_loop_full(const FirstOrderModel& model, const E
   }
   const IntegrationResult ir = integrate(sys, x0, w.outputs, cuts_within(bp, w.a, w.b), o.integrator);
 
-  ClosedLoopResult r;
-  r.ok = ir.ok;
-  r.message = ir.ok ? "" : ir.message;
-  r.t = ir.t;
+  ClosedLoopResult r = start_result(ir, m);
   const int T = static_cast<int>(ir.t.size());
   r.z = ir.x.leftCols(N);
   r.z_dot = ir.x.rightCols(N);
-  r.commands.resize(T, m);
-  r.demanded.resize(T, m);
   for (int i = 0; i < T; ++i) {
     Eigen::VectorXd c, dem, app;
     commands(Instant::at(ir.t(i)), ir.x.row(i).transpose(), c, dem, app);
     r.commands.row(i) = app.transpose();
     r.demanded.row(i) = dem.transpose();
   }
-  saturation_stats(r, o.limits);
-  r.rhs_evaluations = ir.rhs_evaluations;
-  r.steps = ir.steps;
-  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+  finish_result(r, ir, o.limits, clock0);
   return r;
 }
 
