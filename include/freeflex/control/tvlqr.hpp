@@ -13,15 +13,23 @@
 // of P as state (n(n+1)/2 entries: symmetry exact by construction, and half the vector
 // work of the full square; it cut the NOA = 6 benchmark from 60 to 49 ms). The Newton
 // systems (I − γJ) of BDF are solved exactly for a closed loop A_cl = A − S P frozen at
-// the last refresh (every 20 steps, after a convergence failure, at each breakpoint), or
+// the last refresh (every 50 steps, after a convergence failure, at each breakpoint), or
 // on request by GMRES preconditioned with that solve: the P block is the shifted
 // Lyapunov equation (A_clᵀ − I/2γ) Z + Z (A_cl − I/2γ) = −R/γ and the s, c blocks follow
-// by triangular solves, all from one real Schur form of A_cl (O(n³) instead of the O(n⁶)
-// dense LU of an n(n+1)/2-dimensional Jacobian: 18 states → 171 + 19 unknowns, 46 →
-// 1081 + 47 for NOA = 20). BDF rather than Adams because the LQR closed loop is stiff
-// (a real pole at −8.6e3 1/s on the paper beam at NOA = 6). The step count (~1000 per
-// second of time-varying model at NOA = 6) is set by the lightly damped closed-loop
-// modes (−7 ± 308i 1/s), which BDF must resolve; it hardly depends on rtol.
+// by block-triangular solves (O(n³) instead of the O(n⁶) dense LU of an
+// n(n+1)/2-dimensional Jacobian: 18 states → 171 + 19 unknowns, 46 → 1081 + 47 for
+// NOA = 20). A_cl is block-diagonalized at each refresh (ModalLyapunovSolver: then a
+// solve is four n x n products and closed-form 2x2 blocks) unless its eigenvector basis
+// is ill-conditioned (κ > modal_max_condition, e.g. P ≈ 0 with the free body's rigid
+// double integrators), when its real Schur form is used (LyapunovSolver). BDF rather
+// than Adams because the LQR closed loop is stiff (a real pole at −8.6e3 1/s on the
+// paper beam at NOA = 6). The step count (~1000 per second of time-varying model at
+// NOA = 6) is set by the lightly damped closed-loop modes (−7 ± 308i 1/s), which BDF
+// must resolve; it hardly depends on rtol, so the cost is per step: with the vector
+// kernels compiled here (the installed SUNDIALS is unoptimized), the block-diagonal
+// Newton solves and AVX2 products (detail::small_gemm), the NOA = 6 benchmark went from
+// 47 to 15.5 ms (~16 µs per step, about a third of it in the model's A(t), B(t), g(t),
+// 600 of whose ~1600 evaluations are at the output grid) and NOA = 20 from 3.5 to 1.0 s.
 // The model is evaluated at Instant{t, piece_mid} of the pieces between the breakpoints
 // of the nominal motion (plus any given), and the integrator restarts at each of them.
 //
@@ -76,6 +84,10 @@ struct TvlqrOptions {
   /// solve as preconditioner and exact Jacobian products (more work per iteration, kept as
   /// a cross-check).
   enum class NewtonSolver { Lyapunov, Gmres } newton_solver = NewtonSolver::Lyapunov;
+  /// The frozen closed loop is block-diagonalized (ModalLyapunovSolver, ~3x cheaper
+  /// solves) when its eigenvector basis has κ₁ <= this, else brought to real Schur form
+  /// (LyapunovSolver). 0: always the Schur form.
+  double modal_max_condition = 1e6;
 };
 
 struct TvlqrResult {
@@ -98,6 +110,7 @@ struct TvlqrResult {
   long rhs_evaluations = 0;
   long linear_iterations = 0;
   long preconditioner_setups = 0;
+  long modal_setups = 0;  ///< of those, how many used the block-diagonal form
   double wall_time_s = 0.0;
 
   /// Linear interpolation on the grid, held constant outside [t0, tf].
