@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "freeflex/control/lyapunov.hpp"
+#include "sim/fast_nvector.hpp"
 
 namespace freeflex {
 namespace {
@@ -27,163 +28,6 @@ std::string fmt(double v) {
   os << v;
   return os.str();
 }
-
-/// Vector kernels of the serial N_Vector, compiled here. The installed SUNDIALS 6.4
-/// library is built without optimization (its N_VLinearSum_Serial, N_VWrmsNorm_Serial,
-/// ... are -O0 code: ~10 cycles per element), and CVODES' own bookkeeping (Nordsieck
-/// prediction and rescaling, error weights, norms) took ~35% of the NOA = 6 solve. These
-/// replace the ops of the state vector (clones inherit them) with the same arithmetic,
-/// element by element and in the same order, but vectorizable; fused operations
-/// reproduce SUNDIALS' fallback sequences. Only the weighted norm sums in a different
-/// order (four partial sums). Cut the NOA = 6 benchmark from 44 to 33 ms.
-namespace fastvec {
-inline double* data(N_Vector v) { return NV_DATA_S(v); }
-inline sunindextype len(N_Vector v) { return NV_LENGTH_S(v); }
-
-extern "C" void ff_linearsum(sunrealtype a, N_Vector x, sunrealtype b, N_Vector y, N_Vector z) {
-  const sunindextype N = len(x);
-  const double* xd = data(x);  // z may be x or y
-  const double* yd = data(y);
-  double* zd = data(z);
-  // N_VLinearSum_Serial's special cases that round differently from a x + b y
-  if (!((b == 1.0 && z == y) || (a == 1.0 && z == x))) {
-    const bool lin = a == 1.0 || b == 1.0 || a == -1.0 || b == -1.0;
-    if (!lin && a == b) {
-      for (sunindextype i = 0; i < N; ++i) zd[i] = a * (xd[i] + yd[i]);
-      return;
-    }
-    if (!lin && a == -b) {
-      for (sunindextype i = 0; i < N; ++i) zd[i] = a * (xd[i] - yd[i]);
-      return;
-    }
-  }
-  for (sunindextype i = 0; i < N; ++i) zd[i] = a * xd[i] + b * yd[i];
-}
-extern "C" void ff_const(sunrealtype c, N_Vector z) {
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(z); i < N; ++i) zd[i] = c;
-}
-extern "C" void ff_prod(N_Vector x, N_Vector y, N_Vector z) {
-  const double *xd = data(x), *yd = data(y);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = xd[i] * yd[i];
-}
-extern "C" void ff_div(N_Vector x, N_Vector y, N_Vector z) {
-  const double *xd = data(x), *yd = data(y);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = xd[i] / yd[i];
-}
-extern "C" void ff_scale(sunrealtype c, N_Vector x, N_Vector z) {
-  const double* xd = data(x);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = c * xd[i];
-}
-extern "C" void ff_abs(N_Vector x, N_Vector z) {
-  const double* xd = data(x);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = std::abs(xd[i]);
-}
-extern "C" void ff_inv(N_Vector x, N_Vector z) {
-  const double* xd = data(x);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = 1.0 / xd[i];
-}
-extern "C" void ff_addconst(N_Vector x, sunrealtype b, N_Vector z) {
-  const double* xd = data(x);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = xd[i] + b;
-}
-extern "C" sunrealtype ff_wsqrsum(N_Vector x, N_Vector w) {
-  // four partial sums: the sequential sum is latency-bound (the only change of rounding)
-  const double *xd = data(x), *wd = data(w);
-  const sunindextype N = len(x);
-  double s[4] = {0.0, 0.0, 0.0, 0.0};
-  sunindextype i = 0;
-  for (; i + 4 <= N; i += 4)
-    for (int l = 0; l < 4; ++l) {
-      const double p = xd[i + l] * wd[i + l];
-      s[l] += p * p;
-    }
-  for (; i < N; ++i) {
-    const double p = xd[i] * wd[i];
-    s[0] += p * p;
-  }
-  return (s[0] + s[1]) + (s[2] + s[3]);
-}
-extern "C" sunrealtype ff_wrmsnorm(N_Vector x, N_Vector w) {
-  return std::sqrt(ff_wsqrsum(x, w) / static_cast<double>(len(x)));
-}
-extern "C" sunrealtype ff_maxnorm(N_Vector x) {
-  const double* xd = data(x);
-  double m = 0.0;
-  for (sunindextype i = 0, N = len(x); i < N; ++i) m = std::abs(xd[i]) > m ? std::abs(xd[i]) : m;
-  return m;
-}
-extern "C" sunrealtype ff_min(N_Vector x) {
-  const double* xd = data(x);
-  double m = xd[0];
-  for (sunindextype i = 1, N = len(x); i < N; ++i) m = xd[i] < m ? xd[i] : m;
-  return m;
-}
-/// z = c0 X0 + c1 X1 + ..., as SUNDIALS' fallback: N_VScale then N_VLinearSum(c_i, X_i, 1, z, z).
-extern "C" int ff_linearcombination(int nvec, sunrealtype* c, N_Vector* X, N_Vector z) {
-  const sunindextype N = len(z);
-  double* zd = data(z);
-  bool alias = false;
-  for (int k = 1; k < nvec; ++k) alias = alias || X[k] == z;
-  if (alias || nvec > 8) {
-    ff_scale(c[0], X[0], z);
-    for (int k = 1; k < nvec; ++k) ff_linearsum(c[k], X[k], 1.0, z, z);
-    return 0;
-  }
-  const double* xs[8];
-  for (int k = 0; k < nvec; ++k) xs[k] = data(X[k]);
-  for (sunindextype i = 0; i < N; ++i) {
-    double v = c[0] * xs[0][i];
-    for (int k = 1; k < nvec; ++k) v = v + c[k] * xs[k][i];
-    zd[i] = v;
-  }
-  return 0;
-}
-/// Z_i = a_i x + Y_i (the fallback N_VLinearSum(a_i, x, 1, Y_i, Z_i) rounds the same way).
-extern "C" int ff_scaleaddmulti(int nvec, sunrealtype* a, N_Vector x, N_Vector* Y, N_Vector* Z) {
-  const sunindextype N = len(x);
-  bool alias = false;
-  for (int k = 0; k < nvec; ++k) alias = alias || Z[k] == x;
-  if (alias) {
-    for (int k = 0; k < nvec; ++k) ff_linearsum(a[k], x, 1.0, Y[k], Z[k]);
-    return 0;
-  }
-  const double* xd = data(x);
-  for (int k = 0; k < nvec; ++k) {
-    const double* yd = data(Y[k]);
-    double* zd = data(Z[k]);
-    const double ak = a[k];
-    for (sunindextype i = 0; i < N; ++i) zd[i] = ak * xd[i] + yd[i];
-  }
-  return 0;
-}
-
-void install(N_Vector v) {
-  N_Vector_Ops o = v->ops;
-  o->nvlinearsum = ff_linearsum;
-  o->nvconst = ff_const;
-  o->nvprod = ff_prod;
-  o->nvdiv = ff_div;
-  o->nvscale = ff_scale;
-  o->nvabs = ff_abs;
-  o->nvinv = ff_inv;
-  o->nvaddconst = ff_addconst;
-  o->nvwrmsnorm = ff_wrmsnorm;
-  o->nvwsqrsumlocal = ff_wsqrsum;
-  o->nvmaxnorm = ff_maxnorm;
-  o->nvmaxnormlocal = ff_maxnorm;
-  o->nvmin = ff_min;
-  o->nvminlocal = ff_min;
-  o->nvlinearcombination = ff_linearcombination;
-  o->nvscaleaddmulti = ff_scaleaddmulti;
-}
-}  // namespace fastvec
 
 /// The state stores the upper triangle of the symmetric P̂ column by column, then ŝ, then ĉ.
 int tri_size(int n) { return n * (n + 1) / 2; }
@@ -648,7 +492,7 @@ TvlqrResult solve_tvlqr(const LtvSystem& sys, const TvlqrOptions& o) {
   if (SUNContext_Create(nullptr, &cv.ctx) != 0) throw std::runtime_error("solve_tvlqr: SUNContext_Create failed");
   cv.y = N_VNew_Serial(dim, cv.ctx);
   if (!cv.y) throw std::runtime_error("solve_tvlqr: N_VNew_Serial failed");
-  fastvec::install(cv.y);
+  use_compiled_vector_kernels(cv.y);  // clones made by CVODES inherit them
   double* y = N_VGetArrayPointer(cv.y);
   Eigen::Map<Eigen::VectorXd>(y, dim).setZero();
   pack(res.Qf / d.sigma, y);

@@ -1,7 +1,6 @@
 // ODE integration with SUNDIALS CVODES 6.x, cut into pieces at breakpoints
 // (docs/theory.md section 8).
 #include "freeflex/sim/integrator.hpp"
-#include "util/format.hpp"
 
 #include <cvodes/cvodes.h>
 #include <nvector/nvector_serial.h>
@@ -20,6 +19,9 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "sim/fast_nvector.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 namespace {
@@ -296,6 +298,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   if (SUNContext_Create(nullptr, &cv.ctx) != 0 || !cv.ctx)
     throw std::runtime_error("freeflex::integrate: SUNContext_Create failed");
   cv.y = check_alloc(N_VNew_Serial(static_cast<sunindextype>(n), cv.ctx), "N_VNew_Serial");
+  use_compiled_vector_kernels(cv.y);  // CVODES clones its work vectors from y: they inherit them
   double* y = N_VGetArrayPointer(cv.y);
   Eigen::Map<Eigen::VectorXd>(y, n) = x0;
 
