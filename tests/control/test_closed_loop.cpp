@@ -3,7 +3,6 @@
 // signals.
 #include <catch2/catch.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <iostream>
 
@@ -166,25 +165,15 @@ TEST_CASE("TV-LQR Newton solvers agree: exact frozen Lyapunov solve and precondi
   REQUIRE(direct.t.size() == gmres.t.size());
   CHECK(gmres.linear_iterations > 0);
   CHECK(direct.linear_iterations == 0);
-  const std::vector<double> breaks = pert.nominal->breakpoints();
-  double dk = 0.0, dff = 0.0, dk_break = 0.0, dff_break = 0.0;
+  double dk = 0.0, dff = 0.0;
   for (std::size_t i = 0; i < direct.t.size(); ++i) {
-    const double ek = (direct.K[i] - gmres.K[i]).norm() / gmres.K[i].norm();
-    const double eff = (direct.feedforward.row(i) - gmres.feedforward.row(i)).norm();
-    const bool at_break = std::any_of(breaks.begin(), breaks.end(), [&](double b) { return direct.t[i] == b; });
-    (at_break ? dk_break : dk) = std::max(at_break ? dk_break : dk, ek);
-    (at_break ? dff_break : dff) = std::max(at_break ? dff_break : dff, eff);
+    dk = std::max(dk, (direct.K[i] - gmres.K[i]).norm() / gmres.K[i].norm());
+    dff = std::max(dff, (direct.feedforward.row(i) - gmres.feedforward.row(i)).norm());
   }
   const double ff_scale = gmres.feedforward.cwiseAbs().maxCoeff();
-  INFO("max relative gain difference " << dk << " (at breakpoints " << dk_break << "), feedforward " << dff << " ("
-                                       << dff_break << ") of " << ff_scale);
+  INFO("max relative gain difference " << dk << ", feedforward " << dff << " of " << ff_scale);
   CHECK(dk < 1e-7);              // two integrations to rtol 1e-10: differences ~1e-8
   CHECK(dff < 1e-6 * ff_scale);  // the forced part, same
-  // At t = 0.5 s the interpolated nominal θ0'' has a ~1 ms wiggle after the load step; a
-  // step that jumps over it shifts K there by 1.8e-7 and u_ff by 1.3e-5 (measured with
-  // either Newton solver, for about one rtol in eight near 1e-10): more room there.
-  CHECK(dk_break < 1e-6);
-  CHECK(dff_break < 1e-4 * ff_scale);
   CHECK(ff_scale > 0.1);  // the maneuver's forcing asks for feedforward
 }
 
@@ -213,22 +202,16 @@ TEST_CASE("TV-LQR Newton solves: block-diagonal (modal) and Schur forms of the f
   REQUIRE(schur.ok());
   REQUIRE(modal.t.size() == schur.t.size());
   CHECK(schur.modal_setups == 0);
-  CHECK(modal.modal_setups == modal.preconditioner_setups);  // κ(V) ~ 1e3..1e4 here, far below 1e6
-  const std::vector<double> breaks = pert.nominal->breakpoints();
-  double dk = 0.0, dff = 0.0, dk_break = 0.0, dff_break = 0.0;
+  // κ(V) ~ 1e3..1e4 at most refreshes; a few fall back to the Schur form (κ > 1e6)
+  CHECK(modal.modal_setups > modal.preconditioner_setups / 2);
+  double dk = 0.0, dff = 0.0;
   for (std::size_t i = 0; i < modal.t.size(); ++i) {
-    const double ek = (modal.K[i] - schur.K[i]).norm() / schur.K[i].norm();
-    const double eff = (modal.feedforward.row(i) - schur.feedforward.row(i)).norm();
-    const bool at_break = std::any_of(breaks.begin(), breaks.end(), [&](double b) { return modal.t[i] == b; });
-    (at_break ? dk_break : dk) = std::max(at_break ? dk_break : dk, ek);
-    (at_break ? dff_break : dff) = std::max(at_break ? dff_break : dff, eff);
+    dk = std::max(dk, (modal.K[i] - schur.K[i]).norm() / schur.K[i].norm());
+    dff = std::max(dff, (modal.feedforward.row(i) - schur.feedforward.row(i)).norm());
   }
   const double ff_scale = schur.feedforward.cwiseAbs().maxCoeff();
-  INFO("max relative gain difference " << dk << " (at breakpoints " << dk_break << "), feedforward " << dff << " ("
-                                       << dff_break << ") of " << ff_scale);
+  INFO("max relative gain difference " << dk << ", feedforward " << dff << " of " << ff_scale);
   CHECK(dk < 1e-7);              // two integrations to rtol 1e-10: differences ~1e-8
   CHECK(dff < 1e-6 * ff_scale);  // the forced part, same
-  CHECK(dk_break < 1e-6);               // the wiggle of θ0'' after t = 0.5 s, see the test above
-  CHECK(dff_break < 1e-4 * ff_scale);  // same
   CHECK(std::abs(modal.c0 - schur.c0) < 1e-6 * std::abs(schur.c0));  // the cost-to-go, integrated alongside
 }
