@@ -115,6 +115,18 @@ void FirstOrderModel::state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::
   g.tail(N) = llt.solve(o.r0);
 }
 
+namespace {
+/// Work vectors of FirstOrderModel::rhs, one set per thread: after the first call the
+/// right-hand side allocates nothing (it runs ~10⁴ times per simulated second).
+struct RhsScratch {
+  Eigen::VectorXd q, q0, u0, f, dG;
+};
+RhsScratch& rhs_scratch() {
+  thread_local RhsScratch s;
+  return s;
+}
+}  // namespace
+
 void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
                           const Eigen::Ref<const Eigen::VectorXd>& u1, Eigen::Ref<Eigen::VectorXd> x1_dot) const {
   const ModalIntegrals& mi = body_.integrals();
@@ -125,26 +137,33 @@ void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::Vecto
   const Eigen::Matrix2d& C = fr.C;
   const Eigen::Vector2d &Ce1 = fr.Ce1, &Ce2 = fr.Ce2, &CJe2 = fr.CJe2, &Cs0 = fr.Cs0, &CJs0 = fr.CJs0;
   const double th1 = x1(2), th1d = x1(N + 2);
-  const Eigen::VectorXd q = x1.segment(3, n);
+  RhsScratch& w = rhs_scratch();
+  w.q = x1.segment(3, n);
   const auto qd = x1.tail(n);
-  const double Pq = mi.Phi_bar.dot(q), Pqd = mi.Phi_bar.dot(qd);
+  const double Pq = mi.Phi_bar.dot(w.q), Pqd = mi.Phi_bar.dot(qd);
 
   // Loads at (θ0, 0) and their change along (θ1, q): G and dG·[θ1; q].
-  Eigen::VectorXd u0(body_.elements().size()), f = Eigen::VectorXd::Zero(N), dG = Eigen::VectorXd::Zero(N);
-  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
-  commands_(at, u0);
-  for (int e = 0; e < u0.size(); ++e)
-    if (u0(e) != 0.0) body_.add_element_force(e, th, q0, u0(e), f, th1, &q, &dG);
+  w.u0.resize(static_cast<Eigen::Index>(body_.elements().size()));
+  w.f.setZero(N);
+  w.dG.setZero(N);
+  w.q0.setZero(n);
+  Eigen::VectorXd& f = w.f;
+  commands_(at, w.u0);
+  for (int e = 0; e < w.u0.size(); ++e)
+    if (w.u0(e) != 0.0) body_.add_element_force(e, th, w.q0, w.u0(e), f, th1, &w.q, &w.dG);
   for (int k = 0; k < input_size(); ++k)
-    if (u1(k) != 0.0) body_.add_element_force(inputs_[k], th, q0, u1(k), f);
-  f += dG;
+    if (u1(k) != 0.0) body_.add_element_force(inputs_[k], th, w.q0, u1(k), f);
+  f += w.dG;
   // r0 - Kr δz - Cr δz' (eq. 7.1), row block by row block
   f.head<2>() += thd * thd * Cs0 - (mi.m * Rdd + thdd * CJs0)                     // r0
                  + (thdd * Cs0 + thd * thd * CJs0) * th1 - (thdd * CJe2 - thd * thd * Ce2) * Pq
                  + 2.0 * thd * Cs0 * th1d - 2.0 * thd * CJe2 * Pqd;
   f(2) += -(CJs0.dot(Rdd) + mi.I_o * thdd) + Rdd.dot(Cs0) * th1 - Rdd.dot(CJe2) * Pq;
-  f.tail(n) += -(mi.Phi_bar.transpose() * Ce2.dot(Rdd) + mi.Phi_tilde.transpose() * thdd) +
-               mi.Phi_bar.transpose() * (Ce1.dot(Rdd) * th1) - mi.K * q + (thd * thd) * (mi.M * q);
+  auto fq = f.tail(n);
+  fq += -(mi.Phi_bar.transpose() * Ce2.dot(Rdd) + mi.Phi_tilde.transpose() * thdd) +
+        mi.Phi_bar.transpose() * (Ce1.dot(Rdd) * th1);
+  fq.noalias() -= mi.K * w.q;
+  fq.noalias() += (thd * thd) * mi.M * w.q;
   if (body_.damped()) f.noalias() -= body_.damping() * x1.tail(N);
   // 𝕄0(θ0)⁻¹ f = T 𝕄0(0)⁻¹ Tᵀ f
   f.head<2>() = C.transpose() * f.head<2>();
