@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <memory>
 
 #include "freeflex/control/closed_loop.hpp"
 #include "freeflex/control/metrics.hpp"
@@ -140,78 +141,74 @@ TEST_CASE("response metrics on known signals", "[control]") {
   CHECK(m.residual_vibration_energy_J == body.vibration_energy(qT, qdT));
 }
 
-TEST_CASE("TV-LQR Newton solvers agree: exact frozen Lyapunov solve and preconditioned GMRES", "[control]") {
-  const FlexibleBody body = moment_body(4);
-  const Excitation loads = moment_loads();
-  SimulationOptions so;
-  so.duration_s = 3.0;
-  so.output_step_s = 0.01;
-  const PerturbationResult pert = simulate_perturbation(body, loads, so);
-  REQUIRE(pert.total.ok);
-  const std::vector<int> inputs{1, 2, 3};
-  const FirstOrderModel model(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
-  TvlqrOptions o;
-  o.tf = 3.0;
-  o.Q = vibration_weight(body, 1.0, 10.0, 1.0);
-  o.R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
-  o.rtol = 1e-10;
-  o.atol = 1e-12;
-  o.grid_step_s = 0.05;
-  const TvlqrResult direct = solve_tvlqr(model, o);
-  o.newton_solver = TvlqrOptions::NewtonSolver::Gmres;
-  const TvlqrResult gmres = solve_tvlqr(model, o);
-  REQUIRE(direct.ok());
-  REQUIRE(gmres.ok());
-  REQUIRE(direct.t.size() == gmres.t.size());
-  CHECK(gmres.linear_iterations > 0);
-  CHECK(direct.linear_iterations == 0);
-  double dk = 0.0, dff = 0.0;
-  for (std::size_t i = 0; i < direct.t.size(); ++i) {
-    dk = std::max(dk, (direct.K[i] - gmres.K[i]).norm() / gmres.K[i].norm());
-    dff = std::max(dff, (direct.feedforward.row(i) - gmres.feedforward.row(i)).norm());
+namespace {
+
+/// The moment example's first-order model (NOA 4) about the pulse's nominal motion, with
+/// TV-LQR options tight enough (rtol 1e-10) that two ways of solving must agree to 1e-7.
+struct AgreementCase {
+  FlexibleBody body = moment_body(4);
+  Excitation loads = moment_loads();
+  PerturbationResult pert;
+  std::unique_ptr<FirstOrderModel> model;
+  TvlqrOptions options;
+  AgreementCase() {
+    SimulationOptions so;
+    so.duration_s = 3.0;
+    so.output_step_s = 0.01;
+    pert = simulate_perturbation(body, loads, so);
+    const std::vector<int> inputs{1, 2, 3};
+    model = std::make_unique<FirstOrderModel>(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
+    options.tf = 3.0;
+    options.Q = vibration_weight(body, 1.0, 10.0, 1.0);
+    options.R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
+    options.rtol = 1e-10;
+    options.atol = 1e-12;
+    options.grid_step_s = 0.05;
   }
-  const double ff_scale = gmres.feedforward.cwiseAbs().maxCoeff();
+};
+
+/// Gains and feedforward of two solutions of the same problem, at every grid time.
+void check_same_law(const TvlqrResult& a, const TvlqrResult& b) {
+  REQUIRE(a.ok());
+  REQUIRE(b.ok());
+  REQUIRE(a.t.size() == b.t.size());
+  double dk = 0.0, dff = 0.0;
+  for (std::size_t i = 0; i < a.t.size(); ++i) {
+    dk = std::max(dk, (a.K[i] - b.K[i]).norm() / b.K[i].norm());
+    dff = std::max(dff, (a.feedforward.row(i) - b.feedforward.row(i)).norm());
+  }
+  const double ff_scale = b.feedforward.cwiseAbs().maxCoeff();
   INFO("max relative gain difference " << dk << ", feedforward " << dff << " of " << ff_scale);
   CHECK(dk < 1e-7);              // two integrations to rtol 1e-10: differences ~1e-8
   CHECK(dff < 1e-6 * ff_scale);  // the forced part, same
-  CHECK(ff_scale > 0.1);  // the maneuver's forcing asks for feedforward
+  CHECK(ff_scale > 0.1);         // the maneuver's forcing asks for feedforward
+  CHECK(std::abs(a.c0 - b.c0) < 1e-6 * std::abs(b.c0));  // the cost-to-go, integrated alongside
+}
+
+}  // namespace
+
+TEST_CASE("TV-LQR Newton solvers agree: exact frozen Lyapunov solve and preconditioned GMRES", "[control]") {
+  const AgreementCase c;
+  REQUIRE(c.pert.total.ok);
+  TvlqrOptions o = c.options;
+  const TvlqrResult direct = solve_tvlqr(*c.model, o);
+  o.newton_solver = TvlqrOptions::NewtonSolver::Gmres;
+  const TvlqrResult gmres = solve_tvlqr(*c.model, o);
+  CHECK(gmres.linear_iterations > 0);
+  CHECK(direct.linear_iterations == 0);
+  check_same_law(direct, gmres);
 }
 
 TEST_CASE("TV-LQR Newton solves: block-diagonal (modal) and Schur forms of the frozen closed loop agree",
           "[control]") {
-  const FlexibleBody body = moment_body(4);
-  const Excitation loads = moment_loads();
-  SimulationOptions so;
-  so.duration_s = 3.0;
-  so.output_step_s = 0.01;
-  const PerturbationResult pert = simulate_perturbation(body, loads, so);
-  REQUIRE(pert.total.ok);
-  const std::vector<int> inputs{1, 2, 3};
-  const FirstOrderModel model(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
-  TvlqrOptions o;
-  o.tf = 3.0;
-  o.Q = vibration_weight(body, 1.0, 10.0, 1.0);
-  o.R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
-  o.rtol = 1e-10;
-  o.atol = 1e-12;
-  o.grid_step_s = 0.05;
-  const TvlqrResult modal = solve_tvlqr(model, o);  // default: modal_max_condition = 1e6
+  const AgreementCase c;
+  REQUIRE(c.pert.total.ok);
+  TvlqrOptions o = c.options;
+  const TvlqrResult modal = solve_tvlqr(*c.model, o);  // default: modal_max_condition = 1e6
   o.modal_max_condition = 0.0;
-  const TvlqrResult schur = solve_tvlqr(model, o);
-  REQUIRE(modal.ok());
-  REQUIRE(schur.ok());
-  REQUIRE(modal.t.size() == schur.t.size());
+  const TvlqrResult schur = solve_tvlqr(*c.model, o);
   CHECK(schur.modal_setups == 0);
   // κ(V) ~ 1e3..1e4 at most refreshes; a few fall back to the Schur form (κ > 1e6)
   CHECK(modal.modal_setups > modal.preconditioner_setups / 2);
-  double dk = 0.0, dff = 0.0;
-  for (std::size_t i = 0; i < modal.t.size(); ++i) {
-    dk = std::max(dk, (modal.K[i] - schur.K[i]).norm() / schur.K[i].norm());
-    dff = std::max(dff, (modal.feedforward.row(i) - schur.feedforward.row(i)).norm());
-  }
-  const double ff_scale = schur.feedforward.cwiseAbs().maxCoeff();
-  INFO("max relative gain difference " << dk << ", feedforward " << dff << " of " << ff_scale);
-  CHECK(dk < 1e-7);              // two integrations to rtol 1e-10: differences ~1e-8
-  CHECK(dff < 1e-6 * ff_scale);  // the forced part, same
-  CHECK(std::abs(modal.c0 - schur.c0) < 1e-6 * std::abs(schur.c0));  // the cost-to-go, integrated alongside
+  check_same_law(modal, schur);
 }
