@@ -16,18 +16,14 @@
 
 #include "freeflex/control/lyapunov.hpp"
 #include "sim/fast_nvector.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 namespace {
 
 static_assert(sizeof(sunrealtype) == sizeof(double), "freeflex needs SUNDIALS built with double precision");
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(10);
-  os << v;
-  return os.str();
-}
+std::string fmt(double v) { return util::format_number(v, 10); }
 
 /// The state stores the upper triangle of the symmetric P̂ column by column, then ŝ, then ĉ.
 int tri_size(int n) { return n * (n + 1) / 2; }
