@@ -24,10 +24,29 @@ ResponseMetrics response_metrics(const FlexibleBody& body, const Eigen::Ref<cons
     fail("expected one row of commands per time (" + std::to_string(T) + "), got " + std::to_string(commands.rows()));
   for (int i = 1; i < T; ++i)
     if (!(t(i) > t(i - 1))) fail("times must be strictly ascending (index " + std::to_string(i) + ")");
+  if (!(targets.energy_window_s > 0.0)) fail("energy_window_s must be > 0");
 
   ResponseMetrics r;
   const Eigen::VectorXd qT = z.row(T - 1).tail(n).transpose(), qdT = z_dot.row(T - 1).tail(n).transpose();
   r.residual_vibration_energy_J = body.vibration_energy(qT, qdT);
+  {
+    auto energy = [&](int i) {
+      return body.vibration_energy(z.row(i).tail(n).transpose(), z_dot.row(i).tail(n).transpose());
+    };
+    int i0 = T - 1;
+    while (i0 > 0 && t(i0 - 1) >= t(T - 1) - targets.energy_window_s) --i0;
+    if (i0 == T - 1) {
+      r.mean_vibration_energy_J = r.residual_vibration_energy_J;
+    } else {
+      double integral = 0.0, e_prev = energy(i0);
+      for (int i = i0 + 1; i < T; ++i) {
+        const double e = energy(i);
+        integral += 0.5 * (t(i) - t(i - 1)) * (e + e_prev);
+        e_prev = e;
+      }
+      r.mean_vibration_energy_J = integral / (t(T - 1) - t(i0));
+    }
+  }
   const Eigen::RowVectorXd phi_l = body.basis().value(body.beam().x_left());
   const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
   Eigen::VectorXd tip(T);

@@ -139,6 +139,15 @@ TEST_CASE("response metrics on known signals", "[control]") {
   CHECK(m.peak_command == 2.0);
   const Eigen::VectorXd qT = z.row(T - 1).tail(2).transpose(), qdT = zd.row(T - 1).tail(2).transpose();
   CHECK(m.residual_vibration_energy_J == body.vibration_energy(qT, qdT));
+  // E ∝ e^{−2t}: its mean over the last second [7, 8] s is E(8) (e² − 1)/2; the trapezoid
+  // rule at 1 ms is off by ~h²/3 = 3e-7 relative
+  CHECK(m.mean_vibration_energy_J == Approx(m.residual_vibration_energy_J * (std::exp(2.0) - 1.0) / 2.0).epsilon(1e-6));
+  tg.energy_window_s = 100.0;  // longer than the run: the mean over all of it
+  const double E0 = body.vibration_energy(z.row(0).tail(2).transpose(), zd.row(0).tail(2).transpose());
+  CHECK(response_metrics(body, t, z, zd, u, tg).mean_vibration_energy_J ==
+        Approx(E0 * (1.0 - std::exp(-16.0)) / 16.0).epsilon(1e-6));
+  tg.energy_window_s = 0.0;
+  CHECK_THROWS_WITH(response_metrics(body, t, z, zd, u, tg), Catch::Contains("energy_window_s must be > 0"));
 }
 
 namespace {
