@@ -10,14 +10,22 @@ using planar::rot;
 const Eigen::Matrix2d& kJ = planar::J();
 }  // namespace
 
+FullModel::FullModel(const FlexibleBody& body) : body_(body) {
+  const int N = body_.dofs();
+  Eigen::MatrixXd Mb0(N, N);
+  body_.mass_matrix(0.0, Eigen::VectorXd::Zero(body_.n()), Mb0);
+  rest_llt_.compute(Mb0);
+  W_.setZero(N, 2);
+  W_(0, 0) = W_(2, 1) = 1.0;
+  rest_llt_.solveInPlace(W_);
+}
+
 FullModel::Data FullModel::create_data() const {
   const int N = body_.dofs();
   Data d;
-  d.Mz.resize(N, N);
   d.G.resize(N);
   d.b.resize(N);
   d.Mq.resize(body_.n());
-  d.llt = Eigen::LLT<Eigen::MatrixXd>(N);
   return d;
 }
 
@@ -57,15 +65,30 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   const int N = body_.dofs(), n = body_.n();
   const auto z = x.head(N);
   const auto zd = x.tail(N);
-  body_.mass_matrix(z(2), z.tail(n), d.Mz);
+  const auto q = z.tail(n);
   bias(z, zd, d.b, d.Mq);
-  body_.generalized_force(z(2), z.tail(n), commands, d.G);
-  d.llt.compute(d.Mz);
-  if (d.llt.info() != Eigen::Success) return false;
+  body_.generalized_force(z(2), q, commands, d.G);
+  Eigen::VectorXd& f = d.G;
+  f -= d.b;
+  // 𝕄 z'' = f  ⇔  𝕄_b (Tᵀ z'') = Tᵀ f, with 𝕄_b = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ]:
+  // w = y − W S (I + Uᵀ W S)⁻¹ Uᵀ y with y = 𝕄_b(0)⁻¹ Tᵀ f (no S⁻¹: S is singular at q = 0).
+  const Eigen::Matrix2d C = rot(z(2));
+  f.head<2>() = C.transpose() * f.head<2>();
+  rest_llt_.solveInPlace(f);
+  const double a = -body_.integrals().Phi_bar.dot(q), c = q.dot(d.Mq);
+  Eigen::Matrix2d S;
+  S << 0.0, a, a, c;
+  Eigen::Matrix2d UtW;
+  UtW << W_(0, 0), W_(0, 1), W_(2, 0), W_(2, 1);
+  const Eigen::Matrix2d cap = Eigen::Matrix2d::Identity() + UtW * S;
+  // det 𝕄_b = det 𝕄_b(0) · det(cap): a non-positive determinant means 𝕄 is not positive definite
+  const double det = cap.determinant();
+  if (!(det > 0.0)) return false;
+  const Eigen::Vector2d v = cap.inverse() * Eigen::Vector2d(f(0), f(2));
+  f.noalias() -= W_ * (S * v);
+  f.head<2>() = C * f.head<2>();
   x_dot.head(N) = zd;
-  d.G -= d.b;
-  d.llt.solveInPlace(d.G);
-  x_dot.tail(N) = d.G;
+  x_dot.tail(N) = f;
   return true;
 }
 

@@ -11,12 +11,11 @@ class FullModel {
  public:
   /// Scratch space for one thread of evaluation (make one with create_data()).
   struct Data {
-    Eigen::MatrixXd Mz;
     Eigen::VectorXd G, b, Mq;
-    Eigen::LLT<Eigen::MatrixXd> llt;
   };
 
-  explicit FullModel(const FlexibleBody& body) : body_(body) {}
+  /// Factors the body-frame mass matrix at rest once (see rhs).
+  explicit FullModel(const FlexibleBody& body);
   const FlexibleBody& body() const { return body_; }
   int state_size() const { return 2 * body_.dofs(); }
   Data create_data() const;
@@ -27,7 +26,13 @@ class FullModel {
                            const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
   /// x' for x = [z, z'] under element commands u. Returns false if the mass matrix is
-  /// not positive definite (the state has left the model's validity).
+  /// singular or indefinite (the state has left the model's validity).
+  ///
+  /// 𝕄(θ, q) = T 𝕄_b(q) Tᵀ with T = blockdiag(C(θ), 1, I) and the body-frame 𝕄_b(q),
+  /// which differs from 𝕄_b(0) only in the (x, θ) entries (−Φ̄ q) and the (θ, θ) entry
+  /// (+ qᵀ M q): a symmetric rank-two change. So z'' comes from one Cholesky factor of
+  /// 𝕄_b(0), made at construction, and a 2 x 2 Woodbury correction instead of a new
+  /// factorization at every call.
   bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
            Eigen::Ref<Eigen::VectorXd> x_dot) const;
 
@@ -43,6 +48,8 @@ class FullModel {
   void bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
             Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
   const FlexibleBody& body_;
+  Eigen::LLT<Eigen::MatrixXd> rest_llt_;  ///< of 𝕄_b(0)
+  Eigen::MatrixXd W_;                      ///< 𝕄_b(0)⁻¹ [e_x, e_θ] (N x 2)
 };
 
 }  // namespace freeflex
