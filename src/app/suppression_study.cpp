@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 #include "freeflex/app/run.hpp"
 #include "freeflex/control/closed_loop.hpp"
@@ -215,8 +216,10 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   const Eigen::RowVectorXd phi_l = body.basis().value(body.beam().x_left());
   const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
   const int n = body.n();
+  std::vector<ResponseMetrics> metrics;  // one per case, for the table, summary.json and the log
   for (const Case& c : cases) {
-    const ResponseMetrics m = response_metrics(body, c.t, c.z, c.z_dot, c.commands, targets);
+    metrics.push_back(response_metrics(body, c.t, c.z, c.z_dot, c.commands, targets));
+    const ResponseMetrics& m = metrics.back();
     csv << c.name << ',' << c.model << ',' << num(m.residual_vibration_energy_J) << ','
         << num(m.peak_tip_deflection_m) << ',' << num(m.tip_settling_time_s) << ',' << num(m.final_position_error_m)
         << ',' << num(m.final_attitude_error_rad) << ',' << num(m.control_effort) << ',' << num(m.peak_command) << ','
@@ -256,7 +259,7 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   if (log) {
     *log << "  case          model         E_vib(end) [J]  mean, last 1 s [J]   peak tip [m]   effort [N^2 s]\n";
     for (std::size_t i = 0; i < cases.size(); ++i) {
-      const ResponseMetrics m = response_metrics(body, cases[i].t, cases[i].z, cases[i].z_dot, cases[i].commands, targets);
+      const ResponseMetrics& m = metrics[i];
       *log << "  " << std::left << std::setw(14) << cases[i].name << std::setw(14) << cases[i].model << std::right
            << std::setw(14) << std::setprecision(4) << m.residual_vibration_energy_J << std::setw(20)
            << m.mean_vibration_energy_J << std::setw(15)
