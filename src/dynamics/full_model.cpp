@@ -1,6 +1,7 @@
 #include "freeflex/dynamics/full_model.hpp"
 
 #include <cmath>
+#include <cstddef>
 
 #include "planar.hpp"
 
@@ -14,10 +15,9 @@ FullModel::FullModel(const FlexibleBody& body) : body_(body) {
   const int N = body_.dofs();
   Eigen::MatrixXd Mb0(N, N);
   body_.mass_matrix(0.0, Eigen::VectorXd::Zero(body_.n()), Mb0);
-  rest_llt_.compute(Mb0);
-  W_.setZero(N, 2);
-  W_(0, 0) = W_(2, 1) = 1.0;
-  rest_llt_.solveInPlace(W_);
+  // 𝕄_b(0) is symmetric positive definite and well conditioned (the basis is orthogonal in
+  // M): its inverse, formed once, turns each solve into one matrix-vector product.
+  rest_inverse_ = Mb0.llt().solve(Eigen::MatrixXd::Identity(N, N));
 }
 
 FullModel::Data FullModel::create_data() const {
@@ -26,24 +26,26 @@ FullModel::Data FullModel::create_data() const {
   d.G.resize(N);
   d.b.resize(N);
   d.Mq.resize(body_.n());
+  d.Kq.resize(body_.n());
+  d.Dzd.resize(N);
   return d;
 }
 
 void FullModel::bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zd,
-                     Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const {
+                     const Eigen::Matrix2d& C, Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const {
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n();
-  const double th = z(2), thd = zd(2);
+  const double thd = zd(2);
   const auto q = z.tail(n);
   const auto qd = zd.tail(n);
-  const Eigen::Matrix2d C = rot(th);
   const Eigen::Vector2d s(mi.S_o, mi.Phi_bar.dot(q));
   const double Pqd = mi.Phi_bar.dot(qd);
-  Mq.noalias() = mi.M * q;
+  Mq.noalias() = mi.M.lazyProduct(q);
   // eq. 6.2: R row -θ'² C s + 2θ' C J e2 Φ̄ q'; θ row 2θ' qᵀ M q'; q row -θ'² M q + K q
   out.head<2>() = -thd * thd * (C * s) + 2.0 * thd * Pqd * (C * kJ).col(1);
   out(2) = 2.0 * thd * Mq.dot(qd);
-  out.tail(n) = -thd * thd * Mq + mi.K * q;
+  out.tail(n).noalias() = mi.K.lazyProduct(q);
+  out.tail(n) -= (thd * thd) * Mq;
   if (body_.damped()) out.noalias() += body_.damping() * zd;
 }
 
@@ -55,40 +57,85 @@ Eigen::VectorXd FullModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
   Eigen::MatrixXd Mz(N, N);
   body_.mass_matrix(z(2), z.tail(n), Mz);
   Eigen::VectorXd h(N), G(N), Mq(n);
-  bias(z, zd, h, Mq);
+  bias(z, zd, rot(z(2)), h, Mq);
   body_.generalized_force(z(2), z.tail(n), commands, G);
   return Mz * zdd + h - G;
 }
 
 bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                     const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> x_dot) const {
+  // The same equations as residual(), written as plain loops over raw arrays: this runs
+  // tens of thousands of times per simulation on vectors of 9 to 30 entries, where the
+  // setup of Eigen's dynamic-size kernels costs more than the arithmetic.
+  const ModalIntegrals& mi = body_.integrals();
   const int N = body_.dofs(), n = body_.n();
-  const auto z = x.head(N);
-  const auto zd = x.tail(N);
-  const auto q = z.tail(n);
-  bias(z, zd, d.b, d.Mq);
-  body_.generalized_force(z(2), q, commands, d.G);
-  Eigen::VectorXd& f = d.G;
-  f -= d.b;
-  // 𝕄 z'' = f  ⇔  𝕄_b (Tᵀ z'') = Tᵀ f, with 𝕄_b = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ]:
-  // w = y − W S (I + Uᵀ W S)⁻¹ Uᵀ y with y = 𝕄_b(0)⁻¹ Tᵀ f (no S⁻¹: S is singular at q = 0).
-  const Eigen::Matrix2d C = rot(z(2));
-  f.head<2>() = C.transpose() * f.head<2>();
-  rest_llt_.solveInPlace(f);
-  const double a = -body_.integrals().Phi_bar.dot(q), c = q.dot(d.Mq);
-  Eigen::Matrix2d S;
-  S << 0.0, a, a, c;
-  Eigen::Matrix2d UtW;
-  UtW << W_(0, 0), W_(0, 1), W_(2, 0), W_(2, 1);
-  const Eigen::Matrix2d cap = Eigen::Matrix2d::Identity() + UtW * S;
-  // det 𝕄_b = det 𝕄_b(0) · det(cap): a non-positive determinant means 𝕄 is not positive definite
-  const double det = cap.determinant();
+  const double* z = x.data();
+  const double* zd = z + N;
+  const double* q = z + 3;
+  const double* qd = zd + 3;
+  const double th = z[2], thd = zd[2], thd2 = thd * thd;
+  const double c = std::cos(th), s = std::sin(th);
+  body_.generalized_force(th, x.segment(3, n), commands, d.G);  // R rows in inertial axes
+  const double* G = d.G.data();
+  double* Mq = d.Mq.data();
+  double* Kq = d.Kq.data();
+  for (int i = 0; i < n; ++i) Mq[i] = Kq[i] = 0.0;
+  for (int j = 0; j < n; ++j) {
+    const double* Mc = mi.M.data() + static_cast<std::ptrdiff_t>(j) * n;
+    const double* Kc = mi.K.data() + static_cast<std::ptrdiff_t>(j) * n;
+    const double qj = q[j];
+    for (int i = 0; i < n; ++i) {
+      Mq[i] += Mc[i] * qj;
+      Kq[i] += Kc[i] * qj;
+    }
+  }
+  double Pq = 0.0, Pqd = 0.0, qMq = 0.0, qMqd = 0.0;
+  const double* Pb = mi.Phi_bar.data();
+  for (int i = 0; i < n; ++i) {
+    Pq += Pb[i] * q[i];
+    Pqd += Pb[i] * qd[i];
+    qMq += q[i] * Mq[i];
+    qMqd += qd[i] * Mq[i];
+  }
+  // g = Tᵀ (G − h − K q − D z'), eq. 6.2 with the R rows in body axes:
+  // Cᵀ h_R = −θ'² (S_o, Φ̄ q) − 2θ' Φ̄ q' e_x; h_θ = 2θ' qᵀ M q'; h_q = −θ'² M q.
+  double* g = d.b.data();
+  g[0] = c * G[0] + s * G[1] + thd2 * mi.S_o + 2.0 * thd * Pqd;
+  g[1] = -s * G[0] + c * G[1] + thd2 * Pq;
+  g[2] = G[2] - 2.0 * thd * qMqd;
+  for (int i = 0; i < n; ++i) g[3 + i] = G[3 + i] + thd2 * Mq[i] - Kq[i];
+  if (body_.damped()) {
+    d.Dzd.noalias() = body_.damping() * x.tail(N);
+    const double* Dz = d.Dzd.data();
+    g[0] -= c * Dz[0] + s * Dz[1];
+    g[1] -= -s * Dz[0] + c * Dz[1];
+    for (int i = 2; i < N; ++i) g[i] -= Dz[i];
+  }
+  // 𝕄_b (Tᵀ z'') = g with 𝕄_b = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ], S = [[0, −Φ̄q], [−Φ̄q, qᵀMq]]:
+  // w = y − W S (I + Uᵀ W S)⁻¹ Uᵀ y with y = 𝕄_b(0)⁻¹ g (no S⁻¹: S is singular at q = 0).
+  double* w = x_dot.data() + N;
+  for (int i = 0; i < N; ++i) w[i] = 0.0;
+  for (int j = 0; j < N; ++j) {
+    const double* col = rest_inverse_.data() + static_cast<std::ptrdiff_t>(j) * N;
+    const double gj = g[j];
+    for (int i = 0; i < N; ++i) w[i] += col[i] * gj;
+  }
+  const double a = -Pq, cc = qMq;
+  const double W00 = rest_inverse_(0, 0), W01 = rest_inverse_(0, 2), W20 = rest_inverse_(2, 0),
+               W21 = rest_inverse_(2, 2);
+  const double k00 = 1.0 + W01 * a, k01 = W00 * a + W01 * cc, k10 = W21 * a, k11 = 1.0 + W20 * a + W21 * cc;
+  // det 𝕄_b = det 𝕄_b(0) · det(I + Uᵀ W S): a non-positive value means 𝕄 is not positive definite
+  const double det = k00 * k11 - k01 * k10;
   if (!(det > 0.0)) return false;
-  const Eigen::Vector2d v = cap.inverse() * Eigen::Vector2d(f(0), f(2));
-  f.noalias() -= W_ * (S * v);
-  f.head<2>() = C * f.head<2>();
-  x_dot.head(N) = zd;
-  x_dot.tail(N) = f;
+  const double v0 = (k11 * w[0] - k01 * w[2]) / det, v1 = (k00 * w[2] - k10 * w[0]) / det;
+  const double Sv0 = a * v1, Sv1 = a * v0 + cc * v1;
+  const double* W0 = rest_inverse_.data();
+  const double* W2 = rest_inverse_.data() + 2 * static_cast<std::ptrdiff_t>(N);
+  for (int i = 0; i < N; ++i) w[i] -= W0[i] * Sv0 + W2[i] * Sv1;
+  const double wx = w[0], wy = w[1];
+  w[0] = c * wx - s * wy;
+  w[1] = s * wx + c * wy;
+  for (int i = 0; i < N; ++i) x_dot[i] = zd[i];
   return true;
 }
 

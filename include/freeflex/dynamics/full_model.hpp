@@ -11,7 +11,7 @@ class FullModel {
  public:
   /// Scratch space for one thread of evaluation (make one with create_data()).
   struct Data {
-    Eigen::VectorXd G, b, Mq;
+    Eigen::VectorXd G, b, Mq, Kq, Dzd;
   };
 
   /// Factors the body-frame mass matrix at rest once (see rhs).
@@ -30,8 +30,8 @@ class FullModel {
   ///
   /// 𝕄(θ, q) = T 𝕄_b(q) Tᵀ with T = blockdiag(C(θ), 1, I) and the body-frame 𝕄_b(q),
   /// which differs from 𝕄_b(0) only in the (x, θ) entries (−Φ̄ q) and the (θ, θ) entry
-  /// (+ qᵀ M q): a symmetric rank-two change. So z'' comes from one Cholesky factor of
-  /// 𝕄_b(0), made at construction, and a 2 x 2 Woodbury correction instead of a new
+  /// (+ qᵀ M q): a symmetric rank-two change. So z'' comes from the inverse of 𝕄_b(0),
+  /// formed at construction, and a 2 x 2 Woodbury correction instead of a new
   /// factorization at every call.
   bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
            Eigen::Ref<Eigen::VectorXd> x_dot) const;
@@ -46,10 +46,9 @@ class FullModel {
   /// h(z, z') + [0; 0; K q] + D z': everything in eq. 6.2 but inertia and loads.
   /// `Mq` is scratch of size n (receives M q).
   void bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
-            Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
+            const Eigen::Matrix2d& C, Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
   const FlexibleBody& body_;
-  Eigen::LLT<Eigen::MatrixXd> rest_llt_;  ///< of 𝕄_b(0)
-  Eigen::MatrixXd W_;                      ///< 𝕄_b(0)⁻¹ [e_x, e_θ] (N x 2)
+  Eigen::MatrixXd rest_inverse_;  ///< 𝕄_b(0)⁻¹
 };
 
 }  // namespace freeflex
