@@ -239,6 +239,13 @@ void read_simulation(Section& root, Design& d) {
   o.integrator.max_step = s.number("max_step_s", Range::nonnegative(), false).value_or(0.0);
   const std::string method = s.choice("method", {"bdf", "adams"}, false).value_or("adams");
   o.integrator.method = method == "adams" ? IntegratorOptions::Method::Adams : IntegratorOptions::Method::Bdf;
+  auto variables = [&s](const char* key, const char* fallback) {
+    return s.choice(key, {"modal", "physical"}, false).value_or(fallback) == "modal"
+               ? SimulationOptions::Variables::Modal
+               : SimulationOptions::Variables::Physical;
+  };
+  o.full_variables = variables("full_model_variables", "physical");
+  o.first_order_variables = variables("first_order_variables", "modal");
   st.nonlinear = s.boolean("nonlinear", false).value_or(true);
   st.perturbation = s.boolean("perturbation", false).value_or(true);
   if (!st.nonlinear && !st.perturbation)

@@ -260,13 +260,29 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   const double t0 = output_times.front();
   const double tend = output_times.back();
 
+  const VariableChange& change = system.variables;
+  if (change.active() && !change.to_x)
+    throw std::invalid_argument("freeflex::integrate: variables.enter_piece is set but variables.to_x is not");
+  if (change.active() && change.atol_scale.size() != 0 &&
+      (change.atol_scale.size() != n || !(change.atol_scale.array() > 0.0).all() || !change.atol_scale.allFinite()))
+    throw std::invalid_argument("freeflex::integrate: variables.atol_scale must be empty or " + std::to_string(n) +
+                                " finite entries > 0");
+
   IntegrationResult result;
   result.t.resize(static_cast<Eigen::Index>(n_out));
   result.x.resize(static_cast<Eigen::Index>(n_out), n);
   Eigen::Index rows = 0;
+  Eigen::VectorXd x_scratch(n);
+  double piece_mid = t0;  // of the piece whose variables y currently holds
+  // y -> x under the current piece's variables.
+  auto physical = [&](double t, const double* y) -> const double* {
+    if (!change.active()) return y;
+    change.to_x(Instant{t, piece_mid}, Eigen::Map<const Eigen::VectorXd>(y, n), x_scratch);
+    return x_scratch.data();
+  };
   auto record = [&](double t, const double* y) {
     result.t(rows) = t;
-    result.x.row(rows) = Eigen::Map<const Eigen::RowVectorXd>(y, n);
+    result.x.row(rows) = Eigen::Map<const Eigen::RowVectorXd>(physical(t, y), n);
     ++rows;
   };
   auto finish = [&](bool ok) {
@@ -276,7 +292,9 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     return result;
   };
 
-  record(t0, x0.data());
+  result.t(0) = t0;
+  result.x.row(0) = x0.transpose();
+  rows = 1;
   if (n_out == 1) return finish(true);
 
   // Piece boundaries: t0, the breakpoints strictly inside (t0, tend) sorted and deduplicated, tend.
@@ -300,13 +318,42 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   cv.y = check_alloc(N_VNew_Serial(static_cast<sunindextype>(n), cv.ctx), "N_VNew_Serial");
   use_compiled_vector_kernels(cv.y);  // CVODES clones its work vectors from y: they inherit them
   double* y = N_VGetArrayPointer(cv.y);
-  Eigen::Map<Eigen::VectorXd>(y, n) = x0;
+  Eigen::Map<Eigen::VectorXd> y_map(y, n);
+  // x -> y for the piece starting at `start` (identity without a change of variables).
+  auto enter = [&](const Instant& start, const Eigen::VectorXd& x) {
+    piece_mid = start.piece_mid;
+    if (!change.active()) {
+      y_map = x;
+      return true;
+    }
+    bool ok = false;
+    try {
+      ok = change.enter_piece(start, x, y_map) && y_map.allFinite();
+    } catch (const std::exception& e) {
+      data.callback_error = std::string("threw: ") + e.what();
+    }
+    if (!ok) {
+      result.failure_time = start.t;
+      result.message = "the change of integration variables failed at t = " + fmt(start.t) + ": " +
+                       (data.callback_error.empty() ? user_message(system, "right-hand side") : data.callback_error);
+    }
+    return ok;
+  };
+  if (!enter(Instant{t0, data.piece_mid}, x0)) return finish(false);
 
   const bool bdf = options.method == IntegratorOptions::Method::Bdf;
   cv.mem = check_alloc(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, cv.ctx), "CVodeCreate");
   check_setup(CVodeSetErrHandlerFn(cv.mem, freeflex_cvode_err, &data), "CVodeSetErrHandlerFn", data);
   check_setup(CVodeInit(cv.mem, freeflex_cvode_rhs, t0, cv.y), "CVodeInit", data);
-  check_setup(CVodeSStolerances(cv.mem, options.rtol, options.atol), "CVodeSStolerances", data);
+  if (change.active() && change.atol_scale.size() == n) {
+    N_Vector abstol = check_alloc(N_VClone(cv.y), "N_VClone");
+    Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(abstol), n) = options.atol * change.atol_scale;
+    const int flag = CVodeSVtolerances(cv.mem, options.rtol, abstol);  // CVODES keeps a copy
+    N_VDestroy(abstol);
+    check_setup(flag, "CVodeSVtolerances", data);
+  } else {
+    check_setup(CVodeSStolerances(cv.mem, options.rtol, options.atol), "CVodeSStolerances", data);
+  }
   check_setup(CVodeSetUserData(cv.mem, &data), "CVodeSetUserData", data);
   check_setup(CVodeSetMaxNumSteps(cv.mem, options.max_steps), "CVodeSetMaxNumSteps", data);
   if (options.max_step > 0.0) check_setup(CVodeSetMaxStep(cv.mem, options.max_step), "CVodeSetMaxStep", data);
@@ -316,7 +363,8 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
                        "SUNDenseMatrix");
     cv.LS = check_alloc(SUNLinSol_Dense(cv.y, cv.A, cv.ctx), "SUNLinSol_Dense");
     check_setup(CVodeSetLinearSolver(cv.mem, cv.LS, cv.A), "CVodeSetLinearSolver", data);
-    if (system.jacobian) check_setup(CVodeSetJacFn(cv.mem, freeflex_cvode_jac), "CVodeSetJacFn", data);
+    if (system.jacobian && !change.active())
+      check_setup(CVodeSetJacFn(cv.mem, freeflex_cvode_jac), "CVodeSetJacFn", data);
   } else {
     cv.NLS = check_alloc(SUNNonlinSol_FixedPoint(cv.y, 0, cv.ctx), "SUNNonlinSol_FixedPoint");
     check_setup(CVodeSetNonlinearSolver(cv.mem, cv.NLS), "CVodeSetNonlinearSolver", data);
@@ -359,10 +407,15 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
       while (next < n_out && output_times[next] <= b) record(output_times[next++], y);
       continue;
     }
-    // CVodeInit was done at t0; every later piece restarts from the current state.
-    if (a != t0) check_setup(CVodeReInit(cv.mem, a, cv.y), "CVodeReInit", data);
-    check_setup(CVodeSetStopTime(cv.mem, b), "CVodeSetStopTime", data);
+    // CVodeInit was done at t0; every later piece restarts from the current state, mapped
+    // to this piece's variables when they change.
     data.piece_mid = 0.5 * (a + b);
+    if (a != t0) {
+      if (change.active() && !enter(Instant{a, data.piece_mid}, Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(physical(a, y), n))))
+        return finish(false);
+      check_setup(CVodeReInit(cv.mem, a, cv.y), "CVodeReInit", data);
+    }
+    check_setup(CVodeSetStopTime(cv.mem, b), "CVodeSetStopTime", data);
 
     bool at_end = false;     // CVODE has returned the state at b
     bool stepped = false;    // CVode was called in this piece

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "freeflex/sim/modal_variables.hpp"
+
 namespace freeflex {
 namespace {
 
@@ -58,6 +60,11 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
     return model.rhs(*data, x, *u, xd);
   };
   sys.last_error = [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
+  std::unique_ptr<ModalVariables> modal;
+  if (options.full_variables == SimulationOptions::Variables::Modal) {
+    modal = std::make_unique<ModalVariables>(body, sys.rhs);
+    sys = modal->system(sys.last_error);
+  }
   const IntegrationResult ir =
       integrate(sys, x0, output_times(options), breakpoints_within(excitation, options.duration_s), options.integrator);
   SimulationResult r;
@@ -201,6 +208,11 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
     return A.allFinite();
   };
   fsys.last_error = [] { return std::string("the first-order right-hand side is not finite"); };
+  std::unique_ptr<ModalVariables> modal;
+  if (options.first_order_variables == SimulationOptions::Variables::Modal) {
+    modal = std::make_unique<ModalVariables>(body, fsys.rhs, nominal);
+    fsys = modal->system(fsys.last_error);
+  }
   const IntegrationResult fr = integrate(fsys, Eigen::VectorXd::Zero(2 * N), outs, cuts, options.integrator);
   out.first_order_rhs_evaluations = fr.rhs_evaluations;
   SimulationResult& tot = out.total;

@@ -12,6 +12,20 @@
 
 namespace freeflex {
 
+/// An optional change of the variables CVODE integrates (docs/theory.md section 8): the
+/// caller's state x and the integrated y have the same size. At the start of every piece
+/// `enter_piece` maps x to y and may fix constants of that piece; `to_x` maps y back at
+/// any time of the current piece. With a change set, OdeSystem::rhs gives y' = f(t, y).
+struct VariableChange {
+  std::function<bool(const Instant& start, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> y)>
+      enter_piece;
+  std::function<void(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> x)>
+      to_x;
+  /// Per component of y, multiplies IntegratorOptions::atol (empty: 1 for every component).
+  Eigen::VectorXd atol_scale;
+  bool active() const { return static_cast<bool>(enter_piece); }
+};
+
 /// x' = f(t, x). `rhs` must not throw; it returns false to report a failure (the message
 /// is then taken from `last_error`, if set).
 struct OdeSystem {
@@ -22,6 +36,9 @@ struct OdeSystem {
   std::function<bool(const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::MatrixXd> J)>
       jacobian;
   std::function<std::string()> last_error;
+  /// Integrate other variables than x (identity when not set). `jacobian` is then
+  /// ignored: CVODE's difference quotients serve BDF.
+  VariableChange variables;
 };
 
 struct IntegratorOptions {

@@ -21,6 +21,14 @@ struct SimulationOptions {
   /// Spacing of the samples of the zero-order motion handed to the first-order model
   /// (quintic Hermite between samples); the output step if smaller.
   double trajectory_step_s = 1e-3;
+  /// What CVODE integrates (docs/theory.md section 8.3): the state [z, z'] itself, or
+  /// modal amplitudes that leave the free elastic oscillation out. Same equations; the
+  /// modal form takes far fewer steps when the oscillation is nearly free (the
+  /// first-order model always; the full model at rotation rates well below the first
+  /// elastic frequency) and more when fast rotation couples the modes.
+  enum class Variables { Physical, Modal };
+  Variables full_variables = Variables::Physical;      ///< of the full nonlinear model
+  Variables first_order_variables = Variables::Modal;  ///< of the first-order model
 };
 
 struct SimulationResult {
