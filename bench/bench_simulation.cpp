@@ -1,7 +1,7 @@
 // Benchmark (not a test): the paper's moment example (M_z = +-1 N m pulse at the
 // centre of the 1 m, 1 kg, EI = 1 beam) to 3 s at rtol 1e-8, atol 1e-10, for NOA = 6
 // and 20, with the full nonlinear model and the perturbation solution, Adams in modal
-// and in physical variables (docs/theory.md section 8.3), and BDF in physical variables.
+// and in physical variables (docs/theory.md section 8), and BDF in physical variables.
 // Reports wall time per simulation and the right-hand-side evaluation count.
 // Goal (issue 3): under 20 ms for NOA = 6.
 //   cmake -S . -B build-bench -DFREEFLEX_BUILD_BENCHMARKS=ON && cmake --build build-bench

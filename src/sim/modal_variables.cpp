@@ -1,4 +1,4 @@
-// Modal integration variables (docs/theory.md section 8.3).
+// Modal integration variables (docs/theory.md section 8).
 #include "freeflex/sim/modal_variables.hpp"
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Modal integration variables (docs/theory.md section 8.3): the change of variables is
+// Modal integration variables (docs/theory.md section 8): the change of variables is
 // exact (round trip, derivative), so simulations in either variables agree; and it does
 // what it is for, fewer steps when the elastic oscillation is nearly free.
 #include <catch2/catch.hpp>

@@ -1,14 +1,15 @@
 #pragma once
 // Integration variables that leave the elastic oscillation out of what CVODE integrates
-// (docs/theory.md section 8.3). The elastic coordinates are taken to the modes of the
+// (docs/theory.md section 8). The elastic coordinates are taken to the modes of the
 // beam at rest, q = Φ η, and each modal coordinate is written as the quasi-static
 // response to the modal force at the start of the piece plus a free oscillation,
-//   η_k = ρ_k(t_s)/ω_k² + e^{-σ_k τ}-damped [a_k cos ω_dk τ + b_k sin ω_dk τ],  τ = t - t_s,
-// whose amplitudes (a_k, b_k) vary only as fast as the modal force departs from its
-// value at t_s. The rigid coordinates are shifted by the rigid motion each elastic mode
-// carries with it, r_s = r + T q (T = M_rr⁻¹ M_rq at rest, rotated into the inertial
-// frame), so they too see no elastic oscillation to first order. The change is exact:
-// it alters how many steps CVODE takes, never the equations.
+//   η_k = ρ_k(t_s)/ω_k² + a_k cos ω_dk τ + b_k sin ω_dk τ,  τ = t - t_s,
+// whose amplitudes (a_k, b_k) change only as fast as the modal force departs from its
+// value at t_s (and decay with the mode's damping). The rigid coordinates are shifted
+// by the rigid motion each elastic mode carries with it, r_s = r + T q (T = M_rr⁻¹ M_rq
+// at rest, rotated into the inertial frame), so they too see no elastic oscillation to
+// first order. The change is exact: it alters how many steps CVODE takes, never the
+// equations.
 #include <functional>
 #include <memory>
 

@@ -21,7 +21,7 @@ struct SimulationOptions {
   /// Spacing of the samples of the zero-order motion handed to the first-order model
   /// (quintic Hermite between samples); the output step if smaller.
   double trajectory_step_s = 1e-3;
-  /// What CVODE integrates (docs/theory.md section 8.3): the state [z, z'] itself, or
+  /// What CVODE integrates (docs/theory.md section 8): the state [z, z'] itself, or
   /// modal amplitudes that leave the free elastic oscillation out. Same equations; the
   /// modal form takes far fewer steps when the oscillation is nearly free (the
   /// first-order model always; the full model at rotation rates well below the first
