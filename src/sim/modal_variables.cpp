@@ -109,16 +109,11 @@ bool ModalVariables::enter_piece(const Instant& start, const Eigen::Ref<const Ei
   // Rigid coordinates shifted by the rigid motion the elastic deformation carries.
   Tq_.noalias() = T_ * x.segment(3, n);
   Tqd_.noalias() = T_ * x.segment(N + 3, n);
-  Frame fr = frame_at(start);
-  if (fr.from_state) {
-    fr.angle = x(2);
-    fr.rate = x(N + 2);
-  }
-  const Eigen::Matrix2d C = rotation(fr.angle);
-  const Eigen::Vector2d p = Tq_.head<2>(), pd = Tqd_.head<2>();
-  y.head<2>() = x.head<2>() + C * p;
+  Eigen::Vector2d s, s_dot;
+  carried_translation(start, x, s, s_dot);
+  y.head<2>() = x.head<2>() + s;
   y(2) = x(2) + Tq_(2);
-  y.segment<2>(N) = x.segment<2>(N) + C * (pd + fr.rate * quarter_turn(p));
+  y.segment<2>(N) = x.segment<2>(N) + s_dot;
   y(N + 2) = x(N + 2) + Tqd_(2);
   return y.allFinite();
 }
@@ -144,16 +139,24 @@ void ModalVariables::to_physical(const Instant& at, const Eigen::Ref<const Eigen
   Tqd_.noalias() = T_ * x.segment(N + 3, n);
   x(2) = y(2) - Tq_(2);
   x(N + 2) = y(N + 2) - Tqd_(2);
+  Eigen::Vector2d s, s_dot;
+  current_ = carried_translation(at, x, s, s_dot);
+  x.head<2>() = y.head<2>() - s;
+  x.segment<2>(N) = y.segment<2>(N) - s_dot;
+}
+
+ModalVariables::Frame ModalVariables::carried_translation(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                          Eigen::Vector2d& s, Eigen::Vector2d& s_dot) const {
   Frame fr = frame_at(at);
   if (fr.from_state) {
     fr.angle = x(2);
-    fr.rate = x(N + 2);
+    fr.rate = x(N_ + 2);
   }
   const Eigen::Matrix2d C = rotation(fr.angle);
   const Eigen::Vector2d p = Tq_.head<2>(), pd = Tqd_.head<2>();
-  x.head<2>() = y.head<2>() - C * p;
-  x.segment<2>(N) = y.segment<2>(N) - C * (pd + fr.rate * quarter_turn(p));
-  current_ = fr;
+  s = C * p;
+  s_dot = C * (pd + fr.rate * quarter_turn(p));
+  return fr;
 }
 
 bool ModalVariables::rhs(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& y,

@@ -29,6 +29,15 @@ Excitation rich_loads(double eps) {
   return Excitation{{pulse(eps), pulse(0.5 * eps), pulse(-0.4 * eps), pulse(0.3 * eps)}};
 }
 
+SimulationOptions run_options(double duration, double rtol, double atol) {
+  SimulationOptions o;
+  o.duration_s = duration;
+  o.output_step_s = 0.01;
+  o.integrator.rtol = rtol;
+  o.integrator.atol = atol;
+  return o;
+}
+
 Eigen::VectorXd random_state(std::mt19937& rng, int N, double scale) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Eigen::VectorXd x(2 * N);
@@ -94,10 +103,7 @@ TEST_CASE("modal variables: exact change for the full model (S_o, hub, tip mass,
 TEST_CASE("modal variables: exact change for the first-order model about a rotating trajectory", "[sim]") {
   const FlexibleBody body = damped_rich_body();
   const Excitation ex = rich_loads(1.0);
-  SimulationOptions opt;
-  opt.duration_s = 1.5;
-  opt.output_step_s = 0.01;
-  const PerturbationResult pr = simulate_perturbation(body, ex, opt);
+  const PerturbationResult pr = simulate_perturbation(body, ex, run_options(1.5, 1e-8, 1e-10));
   REQUIRE(pr.total.ok);
   REQUIRE(std::abs(pr.nominal->at(Instant::at(0.7)).vel(2)) > 0.1);  // the frame turns
   const FirstOrderModel first(
@@ -115,11 +121,7 @@ TEST_CASE("modal variables: exact change for the first-order model about a rotat
 TEST_CASE("modal and physical variables give the same simulations", "[sim]") {
   const FlexibleBody body = damped_rich_body();
   const Excitation ex = rich_loads(0.3);
-  SimulationOptions opt;
-  opt.duration_s = 2.0;
-  opt.output_step_s = 0.01;
-  opt.integrator.rtol = 1e-10;
-  opt.integrator.atol = 1e-13;
+  const SimulationOptions opt = run_options(2.0, 1e-10, 1e-13);
   auto run = [&](SimulationOptions::Variables v) {
     SimulationOptions o = opt;
     o.full_variables = o.first_order_variables = v;
@@ -147,9 +149,7 @@ TEST_CASE("modal variables take far fewer steps where the oscillation is free", 
   // the modal amplitudes are constant once the loads end. The first-order model about
   // the paper's moment pulse is linear too.
   const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
-  SimulationOptions o;
-  o.duration_s = 3.0;
-  o.output_step_s = 0.01;
+  const SimulationOptions o = run_options(3.0, 1e-8, 1e-10);
   const Excitation ex{{pulse(1.0)}};
   auto steps = [&](ForceElement::Type type, bool full, SimulationOptions::Variables v) {
     const FlexibleBody body(beam, 6, {{"load", type, 0.5, {0.0, 1.0}, false}});

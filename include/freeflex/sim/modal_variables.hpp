@@ -54,6 +54,10 @@ class ModalVariables {
     bool from_state;
   };
   Frame frame_at(const Instant& at) const;
+  /// The frame at `at` (the state's θ, θ' from x for the full model) and the translation
+  /// s = C(φ) (T q)_R that the deformation carries, with its rate; Tq_, Tqd_ must be set.
+  Frame carried_translation(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Vector2d& s,
+                            Eigen::Vector2d& s_dot) const;
 
   int n_, N_;
   PhysicalRhs physical_;
