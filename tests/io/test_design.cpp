@@ -112,7 +112,17 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
   REQUIRE(d.simulation);
   CHECK(d.simulation->options.integrator.rtol == 1e-9);
   CHECK(d.simulation->options.output_step_s == Approx(2.0 / 600));
+  // defaults: modal variables for the first-order model, physical for the full one
+  CHECK(d.simulation->options.first_order_variables == SimulationOptions::Variables::Modal);
+  CHECK(d.simulation->options.full_variables == SimulationOptions::Variables::Physical);
   CHECK(d.force_elements().size() == 2);
+  const Design swapped = parse_design(kPaperBeam + kLoad +
+                                          "[simulation]\nduration_s = 2.0\nfull_model_variables = \"modal\"\n"
+                                          "first_order_variables = \"physical\"\n",
+                                      "t.toml");
+  REQUIRE(swapped.simulation);
+  CHECK(swapped.simulation->options.full_variables == SimulationOptions::Variables::Modal);
+  CHECK(swapped.simulation->options.first_order_variables == SimulationOptions::Variables::Physical);
 }
 
 TEST_CASE("bad loads and tolerances name key and line", "[io]") {
@@ -128,6 +138,8 @@ TEST_CASE("bad loads and tolerances name key and line", "[io]") {
              Contains("line 16: simulation.rtol = -1e-08, must be in (0, 1)"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\natol = -1e-10\n"),
              Contains("line 16: simulation.atol = -1e-10, must be > 0"));
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\nfull_model_variables = \"eigen\"\n"),
+             Contains("line 16: simulation.full_model_variables"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 0\n"),
              Contains("line 15: simulation.duration_s = 0, must be > 0"));
   std::string wrong_count = kLoad;
