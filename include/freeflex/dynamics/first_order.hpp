@@ -42,7 +42,8 @@ class FirstOrderModel {
   /// A(t), B(t), g(t) of eq. 7.3.
   void state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g) const;
   /// x1' = A x1 + B u1 + g without forming A: the products of eq. 7.1 term by term and
-  /// one solve with 𝕄0(θ0) = T 𝕄0(0) Tᵀ, T = blockdiag(C(θ0), 1, I), whose factor is kept.
+  /// one solve with 𝕄0(θ0) = T 𝕄0(0) Tᵀ, T = blockdiag(C(θ0), 1, I), by the kept inverse
+  /// of 𝕄0(0).
   void rhs(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1, const Eigen::Ref<const Eigen::VectorXd>& u1,
            Eigen::Ref<Eigen::VectorXd> x1_dot) const;
 
@@ -51,7 +52,7 @@ class FirstOrderModel {
   const RigidTrajectory& nominal_;
   CommandFunction commands_;
   std::vector<int> inputs_;
-  Eigen::LLT<Eigen::MatrixXd> rest_llt_;  // factor of 𝕄0 at θ = 0
+  Eigen::MatrixXd rest_inverse_;  // 𝕄0(0)⁻¹, the mass matrix at θ = 0
 };
 
 }  // namespace freeflex
