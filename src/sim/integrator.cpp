@@ -411,8 +411,10 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     // to this piece's variables when they change.
     data.piece_mid = 0.5 * (a + b);
     if (a != t0) {
-      if (change.active() && !enter(Instant{a, data.piece_mid}, Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(physical(a, y), n))))
-        return finish(false);
+      if (change.active()) {
+        const Eigen::VectorXd x_at_a = Eigen::Map<const Eigen::VectorXd>(physical(a, y), n);
+        if (!enter(Instant{a, data.piece_mid}, x_at_a)) return finish(false);
+      }
       check_setup(CVodeReInit(cv.mem, a, cv.y), "CVodeReInit", data);
     }
     check_setup(CVodeSetStopTime(cv.mem, b), "CVodeSetStopTime", data);
