@@ -32,20 +32,20 @@ FullModel::Data FullModel::create_data() const {
 }
 
 void FullModel::bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& zd,
-                     const Eigen::Matrix2d& C, Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const {
+                     Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const {
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n();
-  const double thd = zd(2);
+  const double th = z(2), thd = zd(2);
   const auto q = z.tail(n);
   const auto qd = zd.tail(n);
+  const Eigen::Matrix2d C = rot(th);
   const Eigen::Vector2d s(mi.S_o, mi.Phi_bar.dot(q));
   const double Pqd = mi.Phi_bar.dot(qd);
-  Mq.noalias() = mi.M.lazyProduct(q);
+  Mq.noalias() = mi.M * q;
   // eq. 6.2: R row -θ'² C s + 2θ' C J e2 Φ̄ q'; θ row 2θ' qᵀ M q'; q row -θ'² M q + K q
   out.head<2>() = -thd * thd * (C * s) + 2.0 * thd * Pqd * (C * kJ).col(1);
   out(2) = 2.0 * thd * Mq.dot(qd);
-  out.tail(n).noalias() = mi.K.lazyProduct(q);
-  out.tail(n) -= (thd * thd) * Mq;
+  out.tail(n) = -thd * thd * Mq + mi.K * q;
   if (body_.damped()) out.noalias() += body_.damping() * zd;
 }
 
@@ -57,7 +57,7 @@ Eigen::VectorXd FullModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
   Eigen::MatrixXd Mz(N, N);
   body_.mass_matrix(z(2), z.tail(n), Mz);
   Eigen::VectorXd h(N), G(N), Mq(n);
-  bias(z, zd, rot(z(2)), h, Mq);
+  bias(z, zd, h, Mq);
   body_.generalized_force(z(2), z.tail(n), commands, G);
   return Mz * zdd + h - G;
 }

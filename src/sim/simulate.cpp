@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "freeflex/sim/modal_variables.hpp"
 
@@ -28,6 +29,16 @@ std::vector<double> breakpoints_within(const Excitation& ex, double t_end) {
   std::sort(b.begin(), b.end());
   b.erase(std::unique(b.begin(), b.end()), b.end());
   return b;
+}
+
+/// With modal variables, replaces `sys` by the modal system over it; the returned object
+/// must outlive the integration (null for physical variables: `sys` is left as it is).
+std::unique_ptr<ModalVariables> use_variables(SimulationOptions::Variables v, const FlexibleBody& body,
+                                              OdeSystem& sys, std::shared_ptr<const RigidTrajectory> frame) {
+  if (v != SimulationOptions::Variables::Modal) return nullptr;
+  auto modal = std::make_unique<ModalVariables>(body, sys.rhs, std::move(frame));
+  sys = modal->system(sys.last_error);
+  return modal;
 }
 
 }  // namespace
@@ -60,11 +71,7 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
     return model.rhs(*data, x, *u, xd);
   };
   sys.last_error = [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
-  std::unique_ptr<ModalVariables> modal;
-  if (options.full_variables == SimulationOptions::Variables::Modal) {
-    modal = std::make_unique<ModalVariables>(body, sys.rhs);
-    sys = modal->system(sys.last_error);
-  }
+  const auto modal = use_variables(options.full_variables, body, sys, nullptr);
   const IntegrationResult ir =
       integrate(sys, x0, output_times(options), breakpoints_within(excitation, options.duration_s), options.integrator);
   SimulationResult r;
@@ -208,11 +215,7 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
     return A.allFinite();
   };
   fsys.last_error = [] { return std::string("the first-order right-hand side is not finite"); };
-  std::unique_ptr<ModalVariables> modal;
-  if (options.first_order_variables == SimulationOptions::Variables::Modal) {
-    modal = std::make_unique<ModalVariables>(body, fsys.rhs, nominal);
-    fsys = modal->system(fsys.last_error);
-  }
+  const auto modal = use_variables(options.first_order_variables, body, fsys, nominal);
   const IntegrationResult fr = integrate(fsys, Eigen::VectorXd::Zero(2 * N), outs, cuts, options.integrator);
   out.first_order_rhs_evaluations = fr.rhs_evaluations;
   SimulationResult& tot = out.total;

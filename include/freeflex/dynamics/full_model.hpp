@@ -43,10 +43,11 @@ class FullModel {
   double angular_momentum(const Eigen::Ref<const Eigen::VectorXd>& x) const;
 
  private:
-  /// h(z, z') + [0; 0; K q] + D z': everything in eq. 6.2 but inertia and loads.
+  /// h(z, z') + [0; 0; K q] + D z': everything in eq. 6.2 but inertia and loads (the
+  /// reference form for residual(); rhs writes the same terms out in body axes).
   /// `Mq` is scratch of size n (receives M q).
   void bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
-            const Eigen::Matrix2d& C, Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
+            Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
   const FlexibleBody& body_;
   Eigen::MatrixXd rest_inverse_;  ///< 𝕄_b(0)⁻¹
 };
