@@ -13,8 +13,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "freeflex/sim/integrator.hpp"
-#include "freeflex/trajopt/solve.hpp"
+#include "freeflex/trajopt/replay.hpp"
 
 using namespace freeflex;
 
@@ -39,19 +38,11 @@ int main() {
     return 1;
   }
 
-  // Replay the commands open loop, restarting CVODES at every knot (piecewise-smooth u).
-  const ZeroOrderModel zero(body);
-  OdeSystem sys;
-  sys.dim = 6;
-  sys.rhs = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xd) {
-    zero.rhs(x, energy.trajectory->control_at(at), xd);  // the actuators are elements 0 and 1
-    return true;
-  };
+  // Replay the commands open loop through CVODES (restarted at every knot).
   IntegratorOptions io;
   io.rtol = 1e-10;
   io.atol = 1e-12;
-  const std::vector<double> knots(energy.t.data(), energy.t.data() + energy.t.size());
-  const IntegrationResult replay = integrate(sys, p.x_initial, {0.0, energy.duration_s}, knots, io);
+  const IntegrationResult replay = replay_open_loop(body, p, energy, io);
   if (!replay.ok) {
     std::printf("replay failed: %s\n", replay.message.c_str());
     return 1;
