@@ -2,9 +2,15 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <set>
 #include <stdexcept>
+
+#include <dirent.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "freeflex/io/plot.hpp"
 #include "freeflex/version.hpp"
@@ -51,11 +57,107 @@ void make_dirs(const std::string& dir) {
     throw std::runtime_error("output path '" + dir + "' exists and is not a directory");
 }
 
+/// Names of the regular files in `dir` (not recursive); empty if it cannot be read.
+std::vector<std::string> list_files(const std::string& dir) {
+  std::vector<std::string> names;
+  DIR* d = ::opendir(dir.c_str());
+  if (!d) return names;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name == "." || name == "..") continue;
+    struct stat st {};
+    if (::stat((dir + "/" + name).c_str(), &st) == 0 && S_ISREG(st.st_mode)) names.push_back(name);
+  }
+  ::closedir(d);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// Removes a flat directory of files (a staging directory); best effort.
+void remove_flat_dir(const std::string& dir) {
+  for (const auto& f : list_files(dir)) std::remove((dir + "/" + f).c_str());
+  ::rmdir(dir.c_str());
+}
+
+// A run writes into DIR/.freeflex-staging-<pid> and moves its files into DIR only when it
+// has finished (successfully or with a reported numerical failure), so DIR never holds a
+// mixture of two runs: an interrupted run leaves the previous results as they were. The
+// manifest lists the files the last finished run left in DIR; the next one removes them
+// first, so no stale result outlives the run that replaced it. summary.json goes last.
+const char* const kManifest = ".freeflex-files";
+const char* const kStagingPrefix = ".freeflex-staging-";
+
+std::vector<std::string> read_manifest(const std::string& dir) {
+  std::vector<std::string> names;
+  std::ifstream in(dir + "/" + kManifest);
+  std::string line;
+  while (std::getline(in, line))
+    if (!line.empty() && line.find('/') == std::string::npos && line != "." && line != "..") names.push_back(line);
+  return names;
+}
+
+/// Staging directories left by runs that were killed (any process id).
+void remove_stale_staging(const std::string& dir) {
+  DIR* d = ::opendir(dir.c_str());
+  if (!d) return;
+  std::vector<std::string> stale;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name.rfind(kStagingPrefix, 0) == 0) stale.push_back(dir + "/" + name);
+  }
+  ::closedir(d);
+  for (const auto& s : stale) remove_flat_dir(s);
+}
+
+/// Moves every file of `staging` into `dir`, replacing the previous run's files; returns
+/// how many it moved.
+std::size_t commit(const std::string& staging, const std::string& dir) {
+  const std::vector<std::string> fresh = list_files(staging);
+  const std::set<std::string> keep(fresh.begin(), fresh.end());
+  std::remove((dir + "/summary.json").c_str());  // until the new one is in, DIR claims nothing
+  for (const auto& old : read_manifest(dir))
+    if (!keep.count(old)) std::remove((dir + "/" + old).c_str());
+  auto move = [&](const std::string& name) {
+    if (std::rename((staging + "/" + name).c_str(), (dir + "/" + name).c_str()) != 0)
+      throw std::runtime_error("cannot move '" + name + "' into '" + dir + "': " + std::strerror(errno));
+  };
+  for (const auto& f : fresh)
+    if (f != "summary.json") move(f);
+  std::string manifest;
+  for (const auto& f : fresh) manifest += f + "\n";
+  write_file_atomic(dir + "/" + kManifest, manifest);
+  if (keep.count("summary.json")) move("summary.json");
+  ::rmdir(staging.c_str());
+  return fresh.size();
+}
+
+/// The studies of the design, written into `staging`.
+int run_into(const Design& design, const RunOptions& options, const std::string& staging);
+
 }  // namespace
 
 int run_design(const Design& design, const RunOptions& options) {
   make_dirs(options.out_dir);
-  RunOutput out(options.out_dir, options.quiet ? nullptr : options.log);
+  remove_stale_staging(options.out_dir);
+  const std::string staging = options.out_dir + "/" + kStagingPrefix + std::to_string(::getpid());
+  if (::mkdir(staging.c_str(), 0755) != 0)
+    throw std::runtime_error("cannot create '" + staging + "': " + std::strerror(errno));
+  try {
+    const int code = run_into(design, options, staging);
+    const std::size_t n = commit(staging, options.out_dir);
+    if (options.log && !options.quiet)
+      *options.log << "results: " << options.out_dir << " (" << n << " files, summary.json)\n";
+    return code;
+  } catch (...) {
+    remove_flat_dir(staging);  // the previous results stay as they were
+    throw;
+  }
+}
+
+namespace {
+
+int run_into(const Design& design, const RunOptions& options, const std::string& staging) {
+  RunOutput out(staging, options.quiet ? nullptr : options.log);
   Json summary = Json::object();
   summary["freeflex_version"] = version();
   summary["design"] = design.source;
@@ -92,10 +194,10 @@ int run_design(const Design& design, const RunOptions& options) {
   Json warnings = Json::array();
   for (const auto& w : out.warnings()) warnings.push_back(w);
   summary["warnings"] = warnings;
-  write_file_atomic(options.out_dir + "/summary.json", summary.dump());
-  if (options.log && !options.quiet)
-    *options.log << "results: " << options.out_dir << " (" << out.files().size() + 1 << " files, summary.json)\n";
+  write_file_atomic(staging + "/summary.json", summary.dump());
   return code;
 }
+
+}  // namespace
 
 }  // namespace freeflex

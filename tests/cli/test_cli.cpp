@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <sys/stat.h>
+
 #include "support/cli.hpp"
 
 using namespace freeflex_test;
@@ -151,6 +153,32 @@ TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajec
   CHECK(!exists(out + "/trajectory.csv"));
   CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"failed\""));
   CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"infeasible\""));
+}
+
+TEST_CASE("a run replaces the previous run's files in DIR, and a killed run leaves them as they were", "[cli]") {
+  const std::string out = temp_path("replace_out");
+  // A first run: the Table 1 design (table1.csv, fig3), then a user's own file beside it.
+  REQUIRE(run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_table1.toml --out " + out).exit_code ==
+          0);
+  REQUIRE(exists(out + "/table1.csv"));
+  std::ofstream(out + "/notes.txt") << "mine\n";
+  // A run killed before it finished left its staging directory behind.
+  REQUIRE(::mkdir((out + "/.freeflex-staging-1").c_str(), 0755) == 0);
+  std::ofstream(out + "/.freeflex-staging-1/nonlinear.csv") << "t,Rx\n0,";
+  // A second run that fails (an unreachable maneuver): DIR then holds its summary and no
+  // file of the first run, which would otherwise pass for this run's results.
+  const std::string design = write_temp("unreachable2",
+                                        kBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
+                                                "limit = 0.01\n[maneuver]\nactuators = [\"hub\"]\nduration_s = 0.5\n"
+                                                "intervals = 20\nquiet = true\n[maneuver.final]\ntheta_deg = 3000.0\n");
+  const CliResult r = run_cli("run " + design + " --out " + out);
+  INFO(r.output);
+  CHECK(r.exit_code == 1);
+  CHECK(!exists(out + "/table1.csv"));
+  CHECK(!exists(out + "/fig3_mode4.csv"));
+  CHECK(!exists(out + "/.freeflex-staging-1"));
+  CHECK(read(out + "/notes.txt") == "mine\n");  // not freeflex's: left alone
+  CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"failed\""));
 }
 
 namespace {
