@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -14,6 +15,7 @@
 
 #include "freeflex/io/plot.hpp"
 #include "freeflex/version.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 
@@ -37,6 +39,42 @@ void RunOutput::plot(const PlotSpec& spec, bool enabled) {
 void RunOutput::warn(const std::string& message) {
   warnings_.push_back(message);
   if (log_) *log_ << "warning: " << message << '\n';
+}
+
+namespace {
+double wall_s() {
+  using clock = std::chrono::steady_clock;
+  return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
+ProgressReport::ProgressReport(std::ostream* log, double total_s, double every_s)
+    : log_(log), total_s_(total_s), every_s_(every_s), start_(wall_s()), next_(start_ + every_s) {}
+
+void ProgressReport::update(double t) {
+  if (!log_) return;
+  const double now = wall_s();
+  if (now < next_) return;
+  next_ = now + std::max(every_s_, 0.25 * (now - start_));  // sparser as the phase goes on
+  const double pct = total_s_ > 0.0 ? 100.0 * t / total_s_ : 100.0;
+  *log_ << (printed_ ? "" : "\n") << "  " << util::format_number(t, 4) << " of " << util::format_number(total_s_, 6)
+        << " s (" << static_cast<int>(pct) << "%) after " << static_cast<int>(now - start_) << " s\n"
+        << std::flush;
+  printed_ = true;
+}
+
+void ProgressReport::note(const std::string& what) {
+  if (!log_) return;
+  const double now = wall_s();
+  if (now < next_) return;
+  next_ = now + std::max(every_s_, 0.25 * (now - start_));  // sparser as the phase goes on
+  *log_ << (printed_ ? "" : "\n") << "  " << what << " after " << static_cast<int>(now - start_) << " s\n"
+        << std::flush;
+  printed_ = true;
+}
+
+std::function<void(double)> ProgressReport::callback() {
+  return [this](double t) { update(t); };
 }
 
 namespace {

@@ -103,8 +103,11 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
   const FullModel full(body);
   if (st.nonlinear) {
     if (log) *log << "simulation: full nonlinear model, NOA " << n << ", " << st.options.duration_s << " s ... " << std::flush;
-    nl = simulate_full(body, ex, st.options);
-    if (log) *log << (nl.ok ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
+    ProgressReport progress(log, st.options.duration_s);
+    SimulationOptions o = st.options;
+    o.integrator.progress = progress.callback();
+    nl = simulate_full(body, ex, o);
+    if (log) *log << progress.resume() << (nl.ok ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
                   << nl.wall_time_s << " s)" << std::defaultfloat << '\n';
     Json j = run_stats(nl);
     if (nl.ok) {
@@ -129,10 +132,13 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
   }
   if (st.perturbation) {
     if (log) *log << "simulation: perturbation (zero-order, then first-order) ... " << std::flush;
+    ProgressReport progress(log, st.options.duration_s);
+    SimulationOptions o = st.options;
+    o.integrator.progress = progress.callback();
     const PerturbationResult p =
-        nominal ? simulate_perturbation_about(body, ex, nominal, st.options) : simulate_perturbation(body, ex, st.options);
+        nominal ? simulate_perturbation_about(body, ex, nominal, o) : simulate_perturbation(body, ex, o);
     pt = p.total;
-    if (log) *log << (pt.ok ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
+    if (log) *log << progress.resume() << (pt.ok ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
                   << pt.wall_time_s << " s)" << std::defaultfloat << '\n';
     Json j = run_stats(pt);
     j["zero_order_rhs_evaluations"] = static_cast<double>(p.zero_order.rhs_evaluations);

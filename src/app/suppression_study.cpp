@@ -89,13 +89,17 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   std::vector<Case> cases;
   // Open loop: the perturbation solution and the full model.
   if (log) *log << "suppression: open loop (perturbation and full model) ..." << std::flush;
-  const PerturbationResult pert = nominal ? simulate_perturbation_about(body, nominal_ex, nominal, sim)
-                                          : simulate_perturbation(body, nominal_ex, sim);
+  ProgressReport open_progress(log, 2.0 * sim.duration_s);  // the two simulations, one after the other
+  SimulationOptions sim_p = sim;
+  sim_p.integrator.progress = open_progress.callback();
+  const PerturbationResult pert = nominal ? simulate_perturbation_about(body, nominal_ex, nominal, sim_p)
+                                          : simulate_perturbation(body, nominal_ex, sim_p);
   if (!pert.total.ok) throw std::runtime_error("open-loop perturbation simulation failed: " + pert.total.message);
   if (!nominal) nominal = pert.nominal;
-  const SimulationResult full = simulate_full(body, nominal_ex, sim);
+  sim_p.integrator.progress = [&open_progress, &sim](double t) { open_progress.update(sim.duration_s + t); };
+  const SimulationResult full = simulate_full(body, nominal_ex, sim_p);
   if (!full.ok) throw std::runtime_error("open-loop full simulation failed: " + full.message);
-  if (log) *log << " done\n";
+  if (log) *log << open_progress.resume() << " done\n";
   const std::vector<int> none;
   cases.push_back({"open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
                    element_commands(nominal_ex, ne, pert.total.t, none, nullptr)});
@@ -112,8 +116,10 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   to.grid_step_s = st.grid_step_s;
   for (double b : loads.breakpoints()) to.breakpoints.push_back(b);
   if (log) *log << "suppression: TV-LQR over " << st.horizon_s << " s ..." << std::flush;
+  ProgressReport riccati_progress(log, st.horizon_s);  // the backward sweep, tf - t
+  to.progress = riccati_progress.callback();
   const TvlqrResult law = solve_tvlqr(fo, to);
-  if (log) *log << (law.ok() ? " done" : " FAILED") << " (" << std::fixed << std::setprecision(3) << law.wall_time_s
+  if (log) *log << riccati_progress.resume() << (law.ok() ? " done" : " FAILED") << " (" << std::fixed << std::setprecision(3) << law.wall_time_s
                 << " s)" << std::defaultfloat << '\n';
   Json js = Json::object();
   js["actuators"] = [&] {
@@ -140,9 +146,13 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   co.limits = st.limits;
   for (double b : loads.breakpoints()) co.breakpoints.push_back(b);
   if (log) *log << "suppression: closed loop on the first-order and the full model ..." << std::flush;
+  const double span = t_end - co.t_begin;
+  ProgressReport closed_progress(log, 2.0 * span);  // the two simulations, one after the other
+  co.integrator.progress = [&](double t) { closed_progress.update(t - co.t_begin); };
   const ClosedLoopResult cl1 = simulate_closed_loop_first_order(fo, law, u0, co);
+  co.integrator.progress = [&](double t) { closed_progress.update(span + t - co.t_begin); };
   const ClosedLoopResult cl2 = simulate_closed_loop_full(fo, loads, u0, law, co);
-  if (log) *log << " done\n";
+  if (log) *log << closed_progress.resume() << " done\n";
   int code = kExitOk;
   for (const auto* r : {&cl1, &cl2}) {
     if (!r->ok) {
@@ -169,8 +179,10 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
       so.torque_limit_Nm = limit;
       so.modes = k;
       if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ..." << std::flush;
+      ProgressReport progress(log, 0.0);
+      so.progress = [&progress](int sims) { progress.note(std::to_string(sims) + " first-order simulations"); };
       const SwitchTimeResult sw = design_switch_times(body, so);
-      if (log) *log << (sw.ok() ? " done" : " FAILED") << ", duration " << sw.duration_s << " s (rigid T* "
+      if (log) *log << progress.resume() << (sw.ok() ? " done" : " FAILED") << ", duration " << sw.duration_s << " s (rigid T* "
                     << sw.rigid_duration_s << " s), residual/rigid peak " << sw.residual_ratio << '\n';
       Json e = Json::object();
       e["modes"] = k;
@@ -184,6 +196,7 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
       jb.push_back(e);
       if (!sw.ok()) {
         out.warn("bang-bang design for " + std::to_string(k) + " modes did not converge: " + sw.message);
+        code = kExitNumericalFailure;
         continue;
       }
       Excitation ex;
@@ -195,8 +208,13 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
       if (bp.total.ok)
         cases.push_back({name, "first_order", bp.total.t, bp.total.z, bp.total.z_dot,
                          element_commands(ex, ne, bp.total.t, none, nullptr)});
+      else
+        out.warn(name + " perturbation simulation failed: " + bp.total.message);
       if (bf.ok)
         cases.push_back({name, "nonlinear", bf.t, bf.z, bf.z_dot, element_commands(ex, ne, bf.t, none, nullptr)});
+      else
+        out.warn(name + " full simulation failed: " + bf.message);
+      if (!bp.total.ok || !bf.ok) code = kExitNumericalFailure;
     }
     js["bang_bang"] = jb;
   }

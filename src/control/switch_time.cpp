@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <complex>
 #include <random>
@@ -122,6 +123,7 @@ struct Problem {
   TargetModes modes;
   double rtol = 1e-11, atol = 1e-14;
   int simulations = 0;
+  std::function<void(int)> progress;  // SwitchTimeOptions::progress
   std::string last_error;
 };
 
@@ -163,6 +165,7 @@ bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end,
   double T = 0.0;
   const std::vector<double> sw = switches_of(D, T);
   ++P.simulations;
+  if (P.progress) P.progress(P.simulations);
   try {
     const BangBangRotation traj(P.I_o, P.tau, sw, T);
     const int act = P.actuator;
@@ -494,6 +497,7 @@ SwitchTimeResult design_switch_times(const FlexibleBody& body, const SwitchTimeO
   P.dtheta = o.rotation_rad;
   P.rtol = o.rtol;
   P.atol = o.atol;
+  P.progress = o.progress;
   P.modes = target_modes(body, o.actuator, o.rotation_rad, o.modes, where);
   const double Tstar = 2.0 * std::sqrt(P.I_o * P.dtheta / P.tau);
   P.scale = std::sqrt(P.I_o) * P.a * Tstar / 2.0;  // sqrt(I_o) θ'* (rigid peak rate)

@@ -588,6 +588,7 @@ TvlqrResult solve_tvlqr(const LtvSystem& sys, const TvlqrOptions& o) {
                       "the Riccati solution became non-finite at t = " + fmt(o.tf - tret) + " s");
       }
       if (!record(idx)) return finish(TvlqrResult::Status::IntegrationFailed, d.error);
+      if (o.progress) o.progress(o.tf - grid[idx]);
       --idx;
     }
     add_stats();

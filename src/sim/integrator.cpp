@@ -284,6 +284,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     result.t(rows) = t;
     result.x.row(rows) = Eigen::Map<const Eigen::RowVectorXd>(physical(t, y), n);
     ++rows;
+    if (options.progress) options.progress(t);
   };
   auto finish = [&](bool ok) {
     result.ok = ok;

@@ -8,6 +8,7 @@
 
 #include <sys/stat.h>
 
+#include "freeflex/app/run.hpp"
 #include "support/cli.hpp"
 
 using namespace freeflex_test;
@@ -254,4 +255,22 @@ TEST_CASE("bad controller input exits 2: weights, horizon, actuator name", "[cli
     CHECK_THAT(r.output, Contains(expect));
     CHECK(!exists(out));
   }
+}
+
+TEST_CASE("progress lines: none for a short phase, then the fraction covered", "[cli]") {
+  std::ostringstream quiet_log;
+  freeflex::ProgressReport quick(&quiet_log, 10.0, 1e9);  // the first line would be due in 1e9 s
+  quick.update(5.0);
+  quick.note("12 simulations");
+  CHECK(quiet_log.str().empty());
+  CHECK(std::string(quick.resume()).empty());
+
+  std::ostringstream log;
+  freeflex::ProgressReport slow(&log, 20.0, 0.0);  // every call is due
+  slow.update(5.0);
+  slow.callback()(10.0);
+  CHECK_THAT(log.str(), Contains("\n  5 of 20 s (25%) after 0 s\n  10 of 20 s (50%) after 0 s\n"));
+  CHECK(std::string(slow.resume()) == "  ");
+  freeflex::ProgressReport silent(nullptr, 20.0, 0.0);  // no log: nothing to do, no crash
+  silent.update(1.0);
 }

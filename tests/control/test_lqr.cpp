@@ -278,8 +278,13 @@ TEST_CASE("TV-LQR: scalar Riccati closed form", "[control]") {
   o.rtol = 1e-11;
   o.atol = 1e-13;
   o.store_riccati = true;
+  std::vector<double> swept;  // progress: tf - t at each stored grid time, t from tf down to t0
+  o.progress = [&swept](double covered) { swept.push_back(covered); };
   const TvlqrResult res = solve_tvlqr(sys, o);
   REQUIRE(res.ok());
+  REQUIRE(swept.size() + 1 == res.t.size());  // every grid time but tf itself, which needs no step
+  CHECK(std::is_sorted(swept.begin(), swept.end()));
+  CHECK(swept.back() == T);
   const double k = b * b / r, disc = std::sqrt(a * a + k * q);
   const double pp = (a + disc) / k, pm = (a - disc) / k;
   double worst = 0.0;

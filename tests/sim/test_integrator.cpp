@@ -102,10 +102,13 @@ TEST_CASE("piecewise-constant forcing is integrated exactly across breakpoints",
   // 0.5 and 1.0 are both output times and breakpoints; the breakpoint list is unsorted,
   // duplicated and contains points outside the span, all of which must be ignored.
   const std::vector<double> times{0.0, 0.25, 0.5, 0.75, 1.0, 2.0};
+  std::vector<double> reported;  // progress: each output time once recorded, in order
+  opt.progress = [&reported](double t) { reported.push_back(t); };
   const auto r = integrate(sys, Eigen::Vector2d::Zero(), times, {1.0, 0.5, 1.0, -3.0, 0.0, 2.0, 7.0}, opt);
   INFO(r.message);
   REQUIRE(r.ok);
   REQUIRE(r.t.size() == 6);
+  CHECK(reported == std::vector<double>(times.begin() + 1, times.end()));  // t0 is x0 itself
   CHECK(violations.empty());
   // Inside each piece the solution is quadratic; the only error left is that of the order-1
   // start of each piece, held to rtol 1e-12 (observed <= 4e-13), so 2e-12 is a fair bound.

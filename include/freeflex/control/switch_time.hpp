@@ -25,6 +25,7 @@
 //     closed-form root need not survive the softening): Newton's method on the square
 //     system by default, or SLSQP.
 // The residual energy reported is that of the first-order simulation at T.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -74,6 +75,9 @@ struct SwitchTimeOptions {
   /// simulations for k = 1) or NLopt SLSQP with the same gradients (minimizing T under
   /// the equality constraints; about three times the simulations).
   enum class Refine { Newton, Slsqp } refine = Refine::Newton;
+  /// Optional: called with the count of first-order simulations so far after each one
+  /// starts (for progress reports); must not throw.
+  std::function<void(int)> progress;
 };
 
 struct SwitchTimeResult {

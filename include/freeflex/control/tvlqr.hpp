@@ -88,6 +88,9 @@ struct TvlqrOptions {
   /// solves) when its eigenvector basis has κ₁ <= this, else brought to real Schur form
   /// (LyapunovSolver). 0: always the Schur form.
   double modal_max_condition = 1e6;
+  /// Optional: called with tf - t each time the backward sweep stores a grid time t
+  /// (for progress reports on long solves); must not throw.
+  std::function<void(double)> progress;
 };
 
 struct TvlqrResult {

@@ -50,6 +50,9 @@ struct IntegratorOptions {
   double max_step = 0.0;       ///< 0: no limit [s]
   long max_steps = 1000000;    ///< per piece; exceeding it is a failure
   int max_order = 0;           ///< 0: CVODE's default (BDF 5, Adams 12)
+  /// Optional: called with each output time once the state there is recorded (for
+  /// progress reports on long runs); must not throw.
+  std::function<void(double t)> progress;
 };
 
 struct IntegrationResult {
