@@ -79,7 +79,7 @@ std::function<void(double)> ProgressReport::callback() {
 
 namespace {
 
-/// Creates DIR (and missing parents). Throws std::runtime_error with the reason.
+/// Creates DIR (and missing parents). Throws IoError with the reason.
 void make_dirs(const std::string& dir) {
   std::string partial;
   std::size_t pos = 0;
@@ -88,11 +88,11 @@ void make_dirs(const std::string& dir) {
     partial = dir.substr(0, pos);
     if (partial.empty()) continue;
     if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST)
-      throw std::runtime_error("cannot create output directory '" + partial + "': " + std::strerror(errno));
+      throw IoError("cannot create output directory '" + partial + "': " + std::strerror(errno));
   }
   struct stat st {};
   if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
-    throw std::runtime_error("output path '" + dir + "' exists and is not a directory");
+    throw IoError("output path '" + dir + "' exists and is not a directory");
 }
 
 /// Names of the regular files in `dir` (not recursive); empty if it cannot be read.
@@ -157,7 +157,7 @@ std::size_t commit(const std::string& staging, const std::string& dir) {
     if (!keep.count(old)) std::remove((dir + "/" + old).c_str());
   auto move = [&](const std::string& name) {
     if (std::rename((staging + "/" + name).c_str(), (dir + "/" + name).c_str()) != 0)
-      throw std::runtime_error("cannot move '" + name + "' into '" + dir + "': " + std::strerror(errno));
+      throw IoError("cannot move '" + name + "' into '" + dir + "': " + std::strerror(errno));
   };
   for (const auto& f : fresh)
     if (f != "summary.json") move(f);
@@ -179,15 +179,29 @@ int run_design(const Design& design, const RunOptions& options) {
   remove_stale_staging(options.out_dir);
   const std::string staging = options.out_dir + "/" + kStagingPrefix + std::to_string(::getpid());
   if (::mkdir(staging.c_str(), 0755) != 0)
-    throw std::runtime_error("cannot create '" + staging + "': " + std::strerror(errno));
+    throw IoError("cannot create '" + staging + "': " + std::strerror(errno));
   try {
     const int code = run_into(design, options, staging);
     const std::size_t n = commit(staging, options.out_dir);
     if (options.log && !options.quiet)
       *options.log << "results: " << options.out_dir << " (" << n << " files, summary.json)\n";
     return code;
-  } catch (...) {
+  } catch (const IoError&) {
     remove_flat_dir(staging);  // the previous results stay as they were
+    throw;
+  } catch (const std::invalid_argument&) {
+    remove_flat_dir(staging);  // bad input found late: nothing is written (exit 2)
+    throw;
+  } catch (const std::exception& e) {
+    // A computation that failed in a way no study reports by itself: what was written so
+    // far goes out with a summary that says so, and the caller reports the reason.
+    Json summary = Json::object();
+    summary["freeflex_version"] = version();
+    summary["design"] = design.source;
+    summary["status"] = "failed";
+    summary["message"] = std::string(e.what());
+    write_file_atomic(staging + "/summary.json", summary.dump());
+    commit(staging, options.out_dir);
     throw;
   }
 }

@@ -135,8 +135,11 @@ int main(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     std::cerr << "freeflex: " << e.what() << '\n';
     return kExitBadInput;
-  } catch (const std::exception& e) {
+  } catch (const IoError& e) {
     std::cerr << "freeflex: " << e.what() << '\n';
     return kExitIoFailure;
+  } catch (const std::exception& e) {  // a computation failed without a study reporting it
+    std::cerr << "freeflex: failed: " << e.what() << '\n';
+    return kExitNumericalFailure;
   }
 }

@@ -16,18 +16,18 @@ void write_file_atomic(const std::string& path, const std::string& content) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
+    if (!out) throw IoError("cannot write '" + path + "': " + std::strerror(errno));
     out << content;
     out.flush();
     if (!out) {
       std::remove(tmp.c_str());
-      throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
+      throw IoError("cannot write '" + path + "': " + std::strerror(errno));
     }
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string why = std::strerror(errno);
     std::remove(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': " + why);
+    throw IoError("cannot write '" + path + "': " + why);
   }
 }
 

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "util/format.hpp"
+
 namespace freeflex {
 namespace {
 
@@ -33,8 +35,12 @@ ModalVariables::ModalVariables(const FlexibleBody& body, PhysicalRhs physical,
   // Elastic mass with the rigid momenta held (Schur complement) and the modes at rest.
   const Eigen::MatrixXd Mc = M0.bottomRightCorner(n, n) - Mrq.transpose() * T_;
   Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(body.integrals().K, Mc);
-  if (es.info() != Eigen::Success || !(es.eigenvalues().array() > 0.0).all())
-    throw std::runtime_error("ModalVariables: the elastic modes at rest could not be computed");
+  if (es.info() != Eigen::Success)
+    throw std::runtime_error("the elastic modes at rest could not be computed (the eigensolver failed)");
+  if (!(es.eigenvalues().array() > 0.0).all())
+    throw std::runtime_error("the elastic modes at rest could not be computed: the lowest ω² is " +
+                             util::format_number(es.eigenvalues().minCoeff(), 3) +
+                             ", not > 0 (do the beam's mass and stiffness span too many orders of magnitude?)");
   Phi_ = es.eigenvectors();  // Φᵀ M_c Φ = I
   Phi_inv_ = Phi_.transpose() * Mc;
   omega2_ = es.eigenvalues();

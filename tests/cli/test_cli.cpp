@@ -274,3 +274,12 @@ TEST_CASE("progress lines: none for a short phase, then the fraction covered", "
   freeflex::ProgressReport silent(nullptr, 20.0, 0.0);  // no log: nothing to do, no crash
   silent.update(1.0);
 }
+
+TEST_CASE("results that cannot be written exit 3; the design is not to blame", "[cli]") {
+  const std::string file = write_temp("not_a_dir", "x");  // --out names an existing file
+  const CliResult r = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_table1.toml --out " + file);
+  INFO(r.output);
+  CHECK(r.exit_code == 3);
+  CHECK_THAT(r.output, Contains("exists and is not a directory"));
+  CHECK(read(file) == "x");
+}

@@ -3,6 +3,7 @@
 // small JSON value type for summary.json.
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <variant>
@@ -13,7 +14,13 @@
 namespace freeflex {
 
 /// Writes to `path` through a temporary file in the same directory and a rename.
-/// Throws std::runtime_error naming the path and the system's reason on failure.
+/// A result file or directory could not be written (exit code 3), as opposed to a
+/// computation that failed.
+struct IoError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Throws IoError naming the path and the system's reason on failure.
 void write_file_atomic(const std::string& path, const std::string& content);
 
 /// CSV text: one header line, then one line per row of `data` (shortest round-trip digits).
