@@ -578,7 +578,8 @@ TvlqrResult solve_tvlqr(const LtvSystem& sys, const TvlqrOptions& o) {
       if (flag < 0) {
         add_stats();
         std::string msg = "CVODES failed at t = " + fmt(o.tf - tret) + " s: " + flag_name(flag);
-        const std::string why = !d.error.empty() ? d.error : d.cvode_error;
+        // CVODES's own message counts the backward time τ = tf - t.
+        const std::string why = !d.error.empty() ? d.error : d.cvode_error.empty() ? "" : d.cvode_error + " [τ = tf - t]";
         if (!why.empty()) msg += " (" + why + ")";
         return finish(TvlqrResult::Status::IntegrationFailed, msg);
       }
