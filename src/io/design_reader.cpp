@@ -2,25 +2,48 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
+#include "util/format.hpp"
+
 namespace freeflex::io_detail {
-namespace {
+
+std::string shortest(double v) {
+  if (!std::isfinite(v)) return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
+  if (v == std::floor(v) && std::abs(v) < 1e6) return std::to_string(static_cast<long long>(v));  // 10000, not 1e+04
+  for (int digits = 1; digits < 17; ++digits) {
+    std::string s = util::format_number(v, digits);
+    if (std::strtod(s.c_str(), nullptr) == v) return s;
+  }
+  return util::format_number(v, 17);
+}
 
 std::string show(const toml::node& n) {
-  std::ostringstream os;
-  if (n.is_string()) os << '"' << *n.value<std::string>() << '"';  // as the user typed it
-  else n.visit([&](auto&& v) { os << v; });
-  std::string s = os.str();
+  std::string s;
+  if (n.is_string()) {
+    s = '"' + *n.value<std::string>() + '"';  // as the user typed it
+  } else if (n.is_floating_point()) {
+    // shortest round-trip digits (-0.1, not -0.10000000000000001), still a TOML float
+    const double v = *n.value<double>();
+    s = shortest(v);
+    if (std::isfinite(v) && s.find_first_of(".e") == std::string::npos) s += ".0";
+  } else if (const toml::array* arr = n.as_array()) {
+    s = "[";
+    for (std::size_t i = 0; i < arr->size() && s.size() <= 60; ++i) s += (i ? ", " : "") + show(*arr->get(i));
+    s += "]";
+  } else {
+    std::ostringstream os;
+    n.visit([&](auto&& v) { os << v; });
+    s = os.str();
+  }
   if (s.size() > 60) s = s.substr(0, 57) + "...";
   return s;
 }
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
+namespace {
+
+std::string fmt(double v) { return shortest(v); }
 
 }  // namespace
 
@@ -39,16 +62,42 @@ void Problems::add(int line, const std::string& message) {
 bool Range::contains(double v) const {
   if (lo_open ? !(v > lo) : !(v >= lo)) return false;
   if (hi_open ? !(v < hi) : !(v <= hi)) return false;
-  return true;
+  return v >= sane_lo && v <= sane_hi;
 }
 
-std::string Range::describe() const {
-  const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
+namespace {
+
+std::string allowed_text(const Range& r) {
+  const bool has_lo = std::isfinite(r.lo), has_hi = std::isfinite(r.hi);
   if (has_lo && has_hi)
-    return std::string("must be in ") + (lo_open ? "(" : "[") + fmt(lo) + ", " + fmt(hi) + (hi_open ? ")" : "]");
-  if (has_lo) return std::string("must be ") + (lo_open ? "> " : ">= ") + fmt(lo);
-  if (has_hi) return std::string("must be ") + (hi_open ? "< " : "<= ") + fmt(hi);
+    return std::string("must be in ") + (r.lo_open ? "(" : "[") + fmt(r.lo) + ", " + fmt(r.hi) +
+           (r.hi_open ? ")" : "]");
+  if (has_lo) return std::string("must be ") + (r.lo_open ? "> " : ">= ") + fmt(r.lo);
+  if (has_hi) return std::string("must be ") + (r.hi_open ? "< " : "<= ") + fmt(r.hi);
   return "must be a finite number";
+}
+
+std::string supported_text(const Range& r) {
+  const bool has_lo = std::isfinite(r.sane_lo), has_hi = std::isfinite(r.sane_hi);
+  if (has_lo && has_hi) return "within [" + fmt(r.sane_lo) + ", " + fmt(r.sane_hi) + "]";
+  if (has_lo) return "at least " + fmt(r.sane_lo);
+  if (has_hi) return "at most " + fmt(r.sane_hi);
+  return "";
+}
+
+}  // namespace
+
+std::string Range::describe() const {
+  const std::string sup = supported_text(*this);
+  return allowed_text(*this) + (sup.empty() ? "" : ", " + sup);
+}
+
+std::string Range::describe(double v) const {
+  Range wide = *this;
+  wide.sane_lo = -std::numeric_limits<double>::infinity();
+  wide.sane_hi = std::numeric_limits<double>::infinity();
+  if (!wide.contains(v)) return allowed_text(*this);
+  return "must be " + supported_text(*this) + " (the supported range)";
 }
 
 Section::Section(const toml::table* table, std::string path, Problems& problems, int line)
@@ -62,6 +111,11 @@ int Section::line_of(const toml::node& n) const {
 }
 
 bool Section::has(const std::string& key) const { return table_ && table_->get(key) != nullptr; }
+
+int Section::line(const std::string& key) const {
+  const toml::node* n = table_ ? table_->get(key) : nullptr;
+  return n ? line_of(*n) : line_;
+}
 
 const toml::node* Section::get(const std::string& key) {
   asked_.insert(key);
@@ -89,7 +143,7 @@ std::optional<double> Section::number(const std::string& key, const Range& range
     return std::nullopt;
   }
   if (!range.contains(v)) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", " + range.describe());
+    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", " + range.describe(v));
     return std::nullopt;
   }
   return v;
@@ -207,9 +261,15 @@ std::optional<std::vector<double>> Section::number_array(const std::string& key,
   }
   std::vector<double> out;
   for (const auto& e : *arr) {
-    const bool ok = e.is_number() && std::isfinite(*e.value<double>()) && range.contains(*e.value<double>());
+    if (!e.is_number()) {
+      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", must be an array of numbers" +
+                                     (e.is_array() ? " (not of arrays)" : ""));
+      return std::nullopt;
+    }
+    const bool ok = std::isfinite(*e.value<double>()) && range.contains(*e.value<double>());
     if (!ok) {
-      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", each entry " + range.describe());
+      problems_.add(line_of(*n),
+                    key_path(key) + " contains " + show(e) + ", each entry " + range.describe(*e.value<double>()));
       return std::nullopt;
     }
     out.push_back(*e.value<double>());
@@ -249,6 +309,8 @@ std::vector<std::pair<std::string, std::string>> Section::raw_entries() {
       out.emplace_back(key, *v.value<std::string>());
     } else if (v.is_integer()) {
       out.emplace_back(key, std::to_string(*v.value<long long>()));
+    } else if (v.is_floating_point() && !std::isfinite(*v.value<double>())) {
+      problems_.add(line_of(v), key_path(key) + " = " + show(v) + ", must be a finite number");
     } else if (v.is_floating_point()) {
       char buf[32];
       std::snprintf(buf, sizeof buf, "%.17g", *v.value<double>());

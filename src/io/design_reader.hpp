@@ -13,6 +13,11 @@
 
 namespace freeflex::io_detail {
 
+/// `v` in the shortest form that reads back to the same double (0.1, 1e-08, 3).
+std::string shortest(double v);
+/// A value as the user wrote it, numbers in shortest round-trip form; cut at 60 characters.
+std::string show(const toml::node& n);
+
 class Problems {
  public:
   explicit Problems(std::string source) : source_(std::move(source)) {}
@@ -27,16 +32,28 @@ class Problems {
   std::vector<int> lines_;  // line of each problem, for file order
 };
 
-/// An allowed interval for a number; bounds may be open or closed.
+/// An allowed interval for a number; bounds may be open or closed. Inside it, an optional
+/// supported range [sane_lo, sane_hi] rejects magnitudes that are allowed in principle but
+/// absurd in practice (a 1e300 m beam); messages name whichever rule a value breaks.
 struct Range {
   double lo = -std::numeric_limits<double>::infinity();
   double hi = std::numeric_limits<double>::infinity();
   bool lo_open = false, hi_open = false;
+  double sane_lo = -std::numeric_limits<double>::infinity();
+  double sane_hi = std::numeric_limits<double>::infinity();
   static Range positive() { return {0.0, std::numeric_limits<double>::infinity(), true, false}; }
   static Range nonnegative() { return {0.0, std::numeric_limits<double>::infinity(), false, false}; }
   static Range closed(double a, double b) { return {a, b, false, false}; }
+  /// This range, with values outside [a, b] rejected as outside the supported range.
+  Range supported(double a, double b) const {
+    Range r = *this;
+    r.sane_lo = a;
+    r.sane_hi = b;
+    return r;
+  }
   bool contains(double v) const;
-  std::string describe() const;  ///< "must be > 0", "must be in [1, 100]"
+  std::string describe() const;          ///< "must be > 0", "must be in [1, 100]", "must be > 0, at most 1e+06"
+  std::string describe(double v) const;  ///< the rule `v` breaks
 };
 
 class Section {
@@ -48,6 +65,8 @@ class Section {
   int line() const { return line_; }
   const std::string& path() const { return path_; }
   bool has(const std::string& key) const;
+  /// Line of `key` if present, else of this section.
+  int line(const std::string& key) const;
 
   std::optional<double> number(const std::string& key, const Range& range, bool required);
   std::optional<long long> integer(const std::string& key, long long lo, long long hi, bool required);

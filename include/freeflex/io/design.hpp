@@ -4,6 +4,7 @@
 // and radians inside. A file is validated whole before any work: every problem is
 // collected, each naming the key, the line, what was found and what is allowed, and
 // unknown keys are errors.
+#include <cstddef>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,29 @@
 #include "freeflex/trajopt/problem.hpp"
 
 namespace freeflex {
+
+/// Limits on what a design may ask for (README "design keys"). They are generous: they
+/// catch typos and absurd magnitudes before any work, and bound every count a design
+/// derives (rows, samples, grid points) so that no run can exhaust memory.
+namespace design_limits {
+inline constexpr std::size_t kMaxFileBytes = 1 << 20;     ///< a design file: 1 MiB
+inline constexpr double kMaxTime_s = 1e6;                 ///< any time, duration or horizon
+inline constexpr double kMaxOutputRows = 200000;          ///< output rows per series, TV-LQR grid points
+inline constexpr double kMaxTrajectorySamples = 1000000;  ///< samples of the zero-order motion
+inline constexpr int kMaxIntervals = 5000;                ///< collocation intervals (trajopt's max_intervals)
+inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
+inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
+inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;
+inline constexpr double kMinBendingStiffness_Nm2 = 1e-6, kMaxBendingStiffness_Nm2 = 1e12;
+inline constexpr double kMaxRotaryInertia_kgm2 = 1e12;
+inline constexpr double kEndMargin = 1e-3;                             ///< o at least this fraction of L from an end
+inline constexpr double kMaxCommand = 1e12;                            ///< |load value|, actuator limit (N or N m)
+inline constexpr double kMinDirection = 1e-6, kMaxDirection = 1e6;     ///< |direction| of a force element
+inline constexpr double kMaxWeight = 1e12;                             ///< objective and LQR weights
+inline constexpr double kMinInputWeight = 1e-12;                       ///< LQR input weights
+inline constexpr double kMaxPosition_m = 1e6, kMaxVelocity_m_s = 1e6;  ///< maneuver states
+inline constexpr double kMaxAngle_deg = 1e6, kMaxRate_deg_s = 1e6;
+}  // namespace design_limits
 
 /// All problems found in one design file; what() lists them, one per line.
 class DesignError : public std::runtime_error {
@@ -92,7 +116,7 @@ struct ControllerStudy {
 struct BangBangStudy {
   std::string actuator_name;
   int actuator = -1;          ///< element index
-  std::vector<int> modes;     ///< k values, each in [0, 4]
+  std::vector<int> modes;     ///< distinct k values, each in [0, 4] and at most the modes the actuator excites
 };
 
 struct Design {
@@ -116,7 +140,8 @@ struct Design {
   Excitation excitation() const;
 };
 
-/// Reads and validates a design file. Throws DesignError (bad content, unreadable file).
+/// Reads and validates a design file. Throws DesignError (bad content, unreadable file,
+/// not a regular file, larger than design_limits::kMaxFileBytes).
 Design load_design(const std::string& path);
 /// Same, from text; `source` names it in messages.
 Design parse_design(const std::string& text, const std::string& source);
