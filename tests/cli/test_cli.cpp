@@ -275,7 +275,7 @@ TEST_CASE("progress lines: none for a short phase, then the fraction covered", "
   silent.update(1.0);
 }
 
-TEST_CASE("results that cannot be written exit 3; the design is not to blame", "[cli]") {
+TEST_CASE("results that cannot be written exit 3, the design is not to blame", "[cli]") {
   const std::string file = write_temp("not_a_dir", "x");  // --out names an existing file
   const CliResult r = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_table1.toml --out " + file);
   INFO(r.output);

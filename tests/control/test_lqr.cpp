@@ -117,7 +117,7 @@ TEST_CASE("Modal Lyapunov solver: agrees with the Schur solver, residual at roun
   CHECK((X - Eigen::Matrix2d::Identity() / (2.0 * (-1.5 - 2.0))).norm() < 1e-15);  // a few roundings of O(1)
 }
 
-TEST_CASE("Modal Lyapunov solver: a near-defective pair stays one block; ill-conditioned bases are refused",
+TEST_CASE("Modal Lyapunov solver: a near-defective pair stays one block, ill-conditioned bases are refused",
           "[control]") {
   // A double integrator (Jordan block at 0, as the uncontrolled axial motion of the free
   // beam) beside stable modes, mixed by an orthogonal change of basis.
@@ -301,7 +301,7 @@ TEST_CASE("TV-LQR: scalar Riccati closed form", "[control]") {
   CHECK(res.modal_setups == res.preconditioner_setups);  // the default (block-diagonal) Newton solves ran
 }
 
-TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value; perturbations cost more",
+TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value, perturbations cost more",
           "[control]") {
   // Two states, one input, A(t), B(t), g(t) smooth with one breakpoint where g jumps.
   LtvSystem sys;

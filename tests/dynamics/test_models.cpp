@@ -138,7 +138,7 @@ TEST_CASE("zero-order model is the full model's rigid rows at q = 0", "[dynamics
   CHECK(full.residual(z, zd, zdd, u).head<3>().cwiseAbs().maxCoeff() < 1e-13);
 }
 
-TEST_CASE("full model: rhs solves the residual; damping leaves rigid motion alone", "[dynamics]") {
+TEST_CASE("full model: rhs solves the residual, damping leaves rigid motion alone", "[dynamics]") {
   const FlexibleBody body = rich_body(6, {0.05, 0.05});
   const FullModel full(body);
   auto data = full.create_data();

@@ -7,7 +7,7 @@
 
 using namespace freeflex;
 
-TEST_CASE("uniform beam: m, S_o, I_o exact; parity of Phi_bar and Phi_tilde", "[model]") {
+TEST_CASE("uniform beam: m, S_o, I_o exact, parity of Phi_bar and Phi_tilde", "[model]") {
   const double L = 1.7, mass = 2.3, EI = 4.1;
   const Beam beam(BeamProperties::uniform(L, mass, EI));
   REQUIRE(beam.reference_s() == Approx(L / 2).epsilon(1e-15));

@@ -63,7 +63,7 @@ TEST_CASE("paper force example: plane motion, mass centre, perturbation = full",
   CHECK(diff < 1e-8);  // the full model is linear in this motion: integration error only
 }
 
-TEST_CASE("paper moment example: only theta and antisymmetric q; perturbation differs", "[sim][paper]") {
+TEST_CASE("paper moment example: only theta and antisymmetric q, perturbation differs", "[sim][paper]") {
   const FlexibleBody body = paper_body(ForceElement::Type::Torque);
   const Excitation ex{{pulse(1.0)}};
   const SimulationOptions opt = tight(3.0);
