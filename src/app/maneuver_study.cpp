@@ -34,7 +34,15 @@ ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary
     *log << "maneuver: " << to_string(opt.transcription) << ", " << opt.intervals << " intervals, "
          << (st.problem.free_time ? "free" : "fixed") << " duration" << (opt.verbose ? " (Ipopt log follows)" : " ...")
          << std::endl;
+  // [maneuver.ipopt] output_file names a file in the run's directory (the design checked the name).
+  std::string ipopt_file;
+  for (auto& [key, value] : opt.ipopt_options)
+    if (key == "output_file") {
+      ipopt_file = value;
+      value = out.dir() + "/" + value;
+    }
   const TrajoptResult r = solve_maneuver(body, st.problem, opt);
+  if (!ipopt_file.empty()) out.adopt(ipopt_file);
   if (log)
     *log << "maneuver: " << to_string(r.status) << " after " << r.iterations << " iterations, " << std::fixed
          << std::setprecision(3) << r.solve_time_s << " s; objective " << std::defaultfloat << r.objective

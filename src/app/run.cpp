@@ -28,6 +28,13 @@ void RunOutput::csv(const std::string& name, const std::vector<std::string>& hea
   write(name, csv_text(header, data));
 }
 
+void RunOutput::adopt(const std::string& name) {
+  struct stat st {};
+  if (::stat((dir_ + "/" + name).c_str(), &st) == 0 && S_ISREG(st.st_mode) &&
+      std::find(files_.begin(), files_.end(), name) == files_.end())
+    files_.push_back(name);
+}
+
 void RunOutput::plot(const PlotSpec& spec, bool enabled) {
   if (!enabled) return;
   const std::string why = render_plot(spec, dir_);

@@ -1,6 +1,7 @@
 #include "freeflex/io/design.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -556,6 +557,19 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
         ip.problem(
             key, ip.key_path(key) + " = \"" + value + "\", must be \"mumps\" (the only linear solver this Ipopt has)");
         continue;
+      }
+      // Ipopt opens output_file itself: it goes into the run's directory with the other
+      // results (and is replaced with them), so it must be a plain file name.
+      if (key == "output_file") {
+        bool ok = !value.empty() && value.size() <= 64 && value.front() != '.';
+        for (char ch : value) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.');
+        if (!ok) {
+          ip.problem(key, ip.key_path(key) + " = \"" + value +
+                              "\", must be a file name of 1 to 64 letters, digits, '_', '-' or '.', not starting with "
+                              "'.' (Ipopt writes it into the output directory)");
+          continue;
+        }
+        outputs.named(ip, key, value, {""});
       }
       o.ipopt_options.emplace_back(key, value);
     }

@@ -219,10 +219,12 @@ struct IpoptRun {
 
 IpoptRun run_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const TrajoptOptions& o, bool check_derivatives,
                    bool warm) {
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication();
+  // Quiet runs have no console journal rather than print_level 0, which would also
+  // silence the journals that want the log (output_file, keep_log).
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication(o.verbose);
   Ipopt::OptionsList& opts = *app->Options();
   opts.SetStringValue("sb", "yes");  // no banner
-  opts.SetIntegerValue("print_level", o.verbose ? 5 : 0);
+  opts.SetIntegerValue("print_level", 5);
   opts.SetNumericValue("tol", o.tol);
   opts.SetIntegerValue("max_iter", o.max_iter);
   opts.SetStringValue("hessian_approximation", "exact");

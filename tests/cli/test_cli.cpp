@@ -156,6 +156,20 @@ TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajec
   CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"infeasible\""));
 }
 
+TEST_CASE("Ipopt's output_file lands in the output directory with the other results", "[cli][trajopt]") {
+  const std::string design = write_temp("ipopt_file",
+                                        kBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
+                                                "limit = 1.0\n[maneuver]\nactuators = [\"hub\"]\nduration_s = 3.0\n"
+                                                "intervals = 20\nquiet = true\n[maneuver.final]\ntheta_deg = 90.0\n"
+                                                "[maneuver.ipopt]\noutput_file = \"ipopt.out\"\n");
+  const std::string out = temp_path("ipopt_file_out");
+  const CliResult r = run_cli("run " + design + " --out " + out + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(read(out + "/ipopt.out"), Contains("EXIT: Optimal Solution Found"));
+  CHECK_THAT(read(out + "/summary.json"), Contains("\"ipopt.out\""));  // listed with the run's files
+}
+
 TEST_CASE("a run replaces the previous run's files in DIR, and a killed run leaves them as they were", "[cli]") {
   const std::string out = temp_path("replace_out");
   // A first run: the Table 1 design (table1.csv, fig3), then a user's own file beside it.

@@ -335,6 +335,15 @@ TEST_CASE("inputs accepted before but meaningless or fatal later are refused", "
              Contains("line 16: maneuver.ipopt.bound_push = nan, must be a finite number"));
   CHECK_THAT(problems_of(man + "linear_solver = \"ma97\"\n"),
              Contains("line 16: maneuver.ipopt.linear_solver = \"ma97\", must be \"mumps\""));
+  // Ipopt's own log file: a plain name in the output directory, not a path anywhere else
+  CHECK(problems_of(man + "output_file = \"ipopt.out\"\n").empty());
+  for (const char* bad : {"../ipopt.out", "/tmp/ipopt.out", ".hidden", ""})
+    CHECK_THAT(problems_of(man + "output_file = \"" + bad + "\"\n"),
+               Contains("line 16: maneuver.ipopt.output_file = \"" + std::string(bad) +
+                        "\", must be a file name of 1 to 64 letters"));
+  CHECK_THAT(problems_of(man + "output_file = \"trajectory.csv\"\n"),
+             Contains("line 16: maneuver.ipopt.output_file = \"trajectory.csv\" writes trajectory.csv, which "
+                      "[maneuver] writes too"));
   CHECK_THAT(problems_of(replaced(man, "actuators = [\"hub\"]", "actuators = [\"hub\", \"hub\"]")),
              Contains("line 11: maneuver.actuators lists \"hub\" more than once; each actuator at most once"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad +

@@ -36,6 +36,8 @@ class RunOutput {
   RunOutput(std::string dir, std::ostream* log) : dir_(std::move(dir)), log_(log) {}
   void write(const std::string& name, const std::string& content);
   void csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data);
+  /// Counts `name`, which a library wrote into dir() itself, among the run's files (if it is there).
+  void adopt(const std::string& name);
   /// Renders a plot (unless plots are off); a failure becomes a warning, not an error.
   void plot(const PlotSpec& spec, bool enabled);
   void warn(const std::string& message);
