@@ -81,14 +81,21 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
     };
     maneuver->drive(nominal_ex);
     nominal = maneuver->nominal();
-    if (maneuver->duration_s > st.horizon_s)
-      throw std::invalid_argument("controller.horizon_s = " + num(st.horizon_s) + " is shorter than the maneuver (" +
-                                  num(maneuver->duration_s) + " s)");
+    // A fixed duration was checked with the design; a free one is the optimizer's choice.
+    if (maneuver->duration_s > st.horizon_s) {
+      out.warn("controller.horizon_s = " + num(st.horizon_s) + " is shorter than the optimized maneuver (" +
+               num(maneuver->duration_s) + " s): no feedback was designed; raise horizon_s to at least the "
+               "maneuver's t_max_s");
+      Json j = Json::object();
+      j["status"] = "horizon shorter than the maneuver";
+      summary["suppression"] = j;
+      return kExitNumericalFailure;
+    }
   }
 
   std::vector<Case> cases;
   // Open loop: the perturbation solution and the full model.
-  if (log) *log << "suppression: open loop (perturbation and full model) ..." << std::flush;
+  if (log) *log << "suppression: open loop (perturbation and full model) ... " << std::flush;
   ProgressReport open_progress(log, 2.0 * sim.duration_s);  // the two simulations, one after the other
   SimulationOptions sim_p = sim;
   sim_p.integrator.progress = open_progress.callback();
@@ -99,7 +106,7 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   sim_p.integrator.progress = [&open_progress, &sim](double t) { open_progress.update(sim.duration_s + t); };
   const SimulationResult full = simulate_full(body, nominal_ex, sim_p);
   if (!full.ok) throw std::runtime_error("open-loop full simulation failed: " + full.message);
-  if (log) *log << open_progress.resume() << " done\n";
+  if (log) *log << open_progress.resume() << "done\n";
   const std::vector<int> none;
   cases.push_back({"open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
                    element_commands(nominal_ex, ne, pert.total.t, none, nullptr)});
@@ -115,11 +122,11 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   to.R = st.input_weights.asDiagonal();
   to.grid_step_s = st.grid_step_s;
   for (double b : loads.breakpoints()) to.breakpoints.push_back(b);
-  if (log) *log << "suppression: TV-LQR over " << st.horizon_s << " s ..." << std::flush;
+  if (log) *log << "suppression: TV-LQR over " << st.horizon_s << " s ... " << std::flush;
   ProgressReport riccati_progress(log, st.horizon_s);  // the backward sweep, tf - t
   to.progress = riccati_progress.callback();
   const TvlqrResult law = solve_tvlqr(fo, to);
-  if (log) *log << riccati_progress.resume() << (law.ok() ? " done" : " FAILED") << " (" << std::fixed << std::setprecision(3) << law.wall_time_s
+  if (log) *log << riccati_progress.resume() << (law.ok() ? "done" : "FAILED") << " (" << std::fixed << std::setprecision(3) << law.wall_time_s
                 << " s)" << std::defaultfloat << '\n';
   Json js = Json::object();
   js["actuators"] = [&] {
@@ -145,14 +152,14 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   co.output_step_s = sim.output_step_s;
   co.limits = st.limits;
   for (double b : loads.breakpoints()) co.breakpoints.push_back(b);
-  if (log) *log << "suppression: closed loop on the first-order and the full model ..." << std::flush;
+  if (log) *log << "suppression: closed loop on the first-order and the full model ... " << std::flush;
   const double span = t_end - co.t_begin;
   ProgressReport closed_progress(log, 2.0 * span);  // the two simulations, one after the other
   co.integrator.progress = [&](double t) { closed_progress.update(t - co.t_begin); };
   const ClosedLoopResult cl1 = simulate_closed_loop_first_order(fo, law, u0, co);
   co.integrator.progress = [&](double t) { closed_progress.update(span + t - co.t_begin); };
   const ClosedLoopResult cl2 = simulate_closed_loop_full(fo, loads, u0, law, co);
-  if (log) *log << closed_progress.resume() << " done\n";
+  if (log) *log << closed_progress.resume() << "done\n";
   int code = kExitOk;
   for (const auto* r : {&cl1, &cl2}) {
     if (!r->ok) {
@@ -172,17 +179,25 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
     const double rotation = nominal->at(Instant::at(t_end)).pos(2);
     const double limit = design.actuators[static_cast<std::size_t>(bb.actuator) - design.loads.size()].limit;
     Json jb = Json::array();
-    for (int k : bb.modes) {
+    // The design refuses what it can tell up front; an inertial force's moment depends on
+    // the attitude it produces, so only the simulated rotation can show it is not positive.
+    const bool turns = std::isfinite(rotation) && rotation > 0.0;
+    if (!turns) {
+      out.warn("[bang_bang]: the nominal motion turns the beam by " + num(rotation) + " rad by t = " + num(t_end) +
+               " s; bang-bang rotations need a positive angle, so none was designed");
+      code = kExitNumericalFailure;
+    }
+    for (int k : turns ? bb.modes : std::vector<int>{}) {
       SwitchTimeOptions so;
       so.actuator = bb.actuator;
       so.rotation_rad = rotation;
       so.torque_limit_Nm = limit;
       so.modes = k;
-      if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ..." << std::flush;
+      if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ... " << std::flush;
       ProgressReport progress(log, 0.0);
       so.progress = [&progress](int sims) { progress.note(std::to_string(sims) + " first-order simulations"); };
       const SwitchTimeResult sw = design_switch_times(body, so);
-      if (log) *log << progress.resume() << (sw.ok() ? " done" : " FAILED") << ", duration " << sw.duration_s << " s (rigid T* "
+      if (log) *log << progress.resume() << (sw.ok() ? "done" : "FAILED") << ", duration " << sw.duration_s << " s (rigid T* "
                     << sw.rigid_duration_s << " s), residual/rigid peak " << sw.residual_ratio << '\n';
       Json e = Json::object();
       e["modes"] = k;

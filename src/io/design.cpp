@@ -43,6 +43,14 @@ bool check_count(Section& s, const std::string& key, const std::string& lead, co
   return false;
 }
 
+/// `s` without surrounding blanks, in lower case (how Ipopt compares string option values).
+std::string lower_trimmed(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
+  std::string t = b == std::string::npos ? "" : s.substr(b, e - b + 1);
+  for (char& ch : t) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return t;
+}
+
 /// Files the studies will write, so that two of them never share a name (one would
 /// overwrite the other). A name comes from a design key or is fixed by a study.
 class Outputs {
@@ -553,7 +561,7 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
     for (const auto& [key, value] : ip.raw_entries()) {
       // Debian's Ipopt is built with MUMPS only: any other solver makes Ipopt abort the
       // whole process (it tries to load libhsl.so)
-      if (key == "linear_solver" && value != "mumps") {
+      if (key == "linear_solver" && lower_trimmed(value) != "mumps") {
         ip.problem(
             key, ip.key_path(key) + " = \"" + value + "\", must be \"mumps\" (the only linear solver this Ipopt has)");
         continue;
@@ -629,6 +637,12 @@ void read_controller(Section& root, Design& d, Outputs& outputs) {
     } else if (!sane) {
       c.problem("input_weights", c.key_path("input_weights") + ": every entry must be in [" +
                                      shortest(lim::kMinInputWeight) + ", " + shortest(lim::kMaxWeight) + "]");
+    } else if (*std::max_element(w->begin(), w->end()) > lim::kMaxInputWeightSpread * *std::min_element(w->begin(), w->end())) {
+      c.problem("input_weights", c.key_path("input_weights") + " spans " +
+                                     shortest(*std::min_element(w->begin(), w->end())) + " to " +
+                                     shortest(*std::max_element(w->begin(), w->end())) + ", more than a factor " +
+                                     shortest(lim::kMaxInputWeightSpread) +
+                                     " (R would be numerically singular); rescale the actuators' commands instead");
     } else if (w->size() != m) {
       if (names_ok)
         c.problem("input_weights",
@@ -662,6 +676,9 @@ void read_controller(Section& root, Design& d, Outputs& outputs) {
     c.problem("actuators",
               "[controller] needs a nominal motion whose vibration it suppresses: add a [[load]] or a "
               "[maneuver]");
+  if (d.maneuver && !d.maneuver->problem.free_time && horizon && st.horizon_s < d.maneuver->problem.duration_s)
+    c.problem("horizon_s", c.key_path("horizon_s") + " = " + shortest(st.horizon_s) + ", shorter than the maneuver (" +
+                               "maneuver.duration_s = " + shortest(d.maneuver->problem.duration_s) + ")");
   if (!d.loads.empty() && !d.maneuver) {
     const double end = loads_end(d);
     if (horizon && st.horizon_s < end)

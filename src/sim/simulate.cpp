@@ -129,6 +129,7 @@ PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitat
   IntegratorOptions zero_options = options.integrator;
   zero_options.rtol = std::min(zero_options.rtol, 1e-12);
   zero_options.atol = std::min(zero_options.atol, 1e-14);
+  zero_options.progress = nullptr;  // a few dozen steps; progress is the first-order pass's
   const IntegrationResult zr = integrate(zsys, Eigen::VectorXd::Zero(6), all, cuts, zero_options);
   out.zero_order.ok = zr.ok;
   out.zero_order.message = zr.message;

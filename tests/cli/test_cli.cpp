@@ -6,7 +6,10 @@
 #include <fstream>
 #include <sstream>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "freeflex/app/run.hpp"
 #include "support/cli.hpp"
@@ -170,7 +173,7 @@ TEST_CASE("Ipopt's output_file lands in the output directory with the other resu
   CHECK_THAT(read(out + "/summary.json"), Contains("\"ipopt.out\""));  // listed with the run's files
 }
 
-TEST_CASE("a run replaces the previous run's files in DIR, and a killed run leaves them as they were", "[cli]") {
+TEST_CASE("a run replaces the previous run's files in DIR and clears what a killed run left", "[cli]") {
   const std::string out = temp_path("replace_out");
   // A first run: the Table 1 design (table1.csv, fig3), then a user's own file beside it.
   REQUIRE(run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_table1.toml --out " + out).exit_code ==
@@ -194,6 +197,34 @@ TEST_CASE("a run replaces the previous run's files in DIR, and a killed run leav
   CHECK(!exists(out + "/.freeflex-staging-1"));
   CHECK(read(out + "/notes.txt") == "mine\n");  // not freeflex's: left alone
   CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"failed\""));
+}
+
+TEST_CASE("one run at a time writes into DIR, and links in DIR are not followed", "[cli]") {
+  const std::string out = temp_path("locked_out");
+  REQUIRE(::mkdir(out.c_str(), 0755) == 0);
+  // Someone's data behind a link that looks like a leftover staging directory.
+  const std::string data = temp_path("precious");
+  REQUIRE(::mkdir(data.c_str(), 0755) == 0);
+  std::ofstream(data + "/keep.csv") << "1\n";
+  REQUIRE(::symlink(data.c_str(), (out + "/.freeflex-staging-77").c_str()) == 0);
+  const std::string table1 = "run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_table1.toml --out " + out;
+  {
+    // Another run holds DIR: this one stops at once, exit 3, and touches nothing.
+    const int fd = ::open((out + "/.freeflex-lock").c_str(), O_RDWR | O_CREAT, 0644);
+    REQUIRE(fd >= 0);
+    REQUIRE(::flock(fd, LOCK_EX | LOCK_NB) == 0);
+    const CliResult r = run_cli(table1);
+    ::close(fd);
+    INFO(r.output);
+    CHECK(r.exit_code == 3);
+    CHECK_THAT(r.output, Contains("another freeflex run is writing into"));
+    CHECK(!exists(out + "/summary.json"));
+  }
+  const CliResult r = run_cli(table1);
+  INFO(r.output);
+  CHECK(r.exit_code == 0);
+  CHECK(exists(out + "/table1.csv"));
+  CHECK(read(data + "/keep.csv") == "1\n");
 }
 
 namespace {

@@ -203,6 +203,19 @@ TEST_CASE("controller keys load, bad weights, horizons and names are reported", 
                       "positive definite)"));
   CHECK_THAT(problems_of(head + "horizon_s = 0.5\n"),
              Contains("line 21: controller.horizon_s = 0.5, shorter than the maneuver (its loads act until 1 s)"));
+  // Two actuators whose weights differ by more than 1e12: R would be singular to the LQR.
+  const std::string two = kPaperBeam + acts + "[[actuator]]\nname = \"tip\"\ntype = \"thruster\"\nposition_m = 1.0\n" +
+                          "direction = [0.0, 1.0]\n[controller]\nactuators = [\"hub\", \"tip\"]\nhorizon_s = 3.0\n";
+  CHECK(problems_of(two + "input_weights = [1e-6, 1e6]\n").empty());
+  CHECK_THAT(problems_of(two + "input_weights = [1e-7, 1e6]\n"),
+             Contains("line 27: controller.input_weights spans 1e-07 to 1e+06, more than a factor 1e+12"));
+  // A maneuver of fixed duration longer than the horizon is refused before anything runs.
+  const std::string man = kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
+                          "limit = 1.0\n[maneuver]\nactuators = [\"hub\"]\nduration_s = 3.0\n[maneuver.final]\n"
+                          "theta_deg = 90.0\n[controller]\nactuators = [\"hub\"]\n";  // [controller] line 15
+  CHECK(problems_of(man + "horizon_s = 3.0\n").empty());
+  CHECK_THAT(problems_of(man + "horizon_s = 2.5\n"),
+             Contains("line 17: controller.horizon_s = 2.5, shorter than the maneuver (maneuver.duration_s = 3)"));
   CHECK_THAT(problems_of(kPaperBeam + acts + "[controller]\nactuators = [\"rudder\"]\nhorizon_s = 3.0\n"),
              Contains("line 20: controller.actuators: \"rudder\" is not an [[actuator]] (known: 'hub')"));
 }
@@ -335,6 +348,7 @@ TEST_CASE("inputs accepted before but meaningless or fatal later are refused", "
              Contains("line 16: maneuver.ipopt.bound_push = nan, must be a finite number"));
   CHECK_THAT(problems_of(man + "linear_solver = \"ma97\"\n"),
              Contains("line 16: maneuver.ipopt.linear_solver = \"ma97\", must be \"mumps\""));
+  CHECK(problems_of(man + "linear_solver = \" MUMPS\"\n").empty());  // Ipopt ignores case and blanks
   // Ipopt's own log file: a plain name in the output directory, not a path anywhere else
   CHECK(problems_of(man + "output_file = \"ipopt.out\"\n").empty());
   for (const char* bad : {"../ipopt.out", "/tmp/ipopt.out", ".hidden", ""})
@@ -417,9 +431,9 @@ TEST_CASE("absurd magnitudes are outside the supported range", "[io]") {
   CHECK_THAT(problems_of(kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
                                       "limit = 1e13\n"),
              Contains("line 9: actuator[1].limit = 1e+13, must be at most 1e+12"));
-  CHECK_THAT(problems_of(kPaperBeam + "[[beam.segment]]\nlength_m = 1.0\nmass_per_length_kg_m = 1e-12\n"
-                                      "bending_stiffness_Nm2 = 1.0\n"),
-             Contains("beam: give either length_m"));
+  CHECK_THAT(problems_of("[[beam.segment]]\nlength_m = 1.0\nmass_per_length_kg_m = 1e-12\n"
+                         "bending_stiffness_Nm2 = 1.0\n"),
+             Contains("line 3: beam.segment[1].mass_per_length_kg_m = 1e-12, must be within [1e-06, 1e+06]"));
   CHECK_THAT(
       problems_of("[[beam.segment]]\nlength_m = 0.5\nmass_per_length_kg_m = 1e12\nbending_stiffness_Nm2 = 1.0\n"
                   "[[beam.segment]]\nlength_m = 0.5\nmass_per_length_kg_m = 1.0\nbending_stiffness_Nm2 = 1e-12\n"),

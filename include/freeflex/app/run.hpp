@@ -33,7 +33,9 @@ struct RunOptions {
 /// Collects the files of one run and the figures that could not be drawn.
 class RunOutput {
  public:
-  RunOutput(std::string dir, std::ostream* log) : dir_(std::move(dir)), log_(log) {}
+  /// Files go into `dir`; messages name `shown_dir` (where they end up) if it is given.
+  RunOutput(std::string dir, std::ostream* log, std::string shown_dir = {})
+      : dir_(std::move(dir)), shown_dir_(shown_dir.empty() ? dir_ : std::move(shown_dir)), log_(log) {}
   void write(const std::string& name, const std::string& content);
   void csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data);
   /// Counts `name`, which a library wrote into dir() itself, among the run's files (if it is there).
@@ -47,7 +49,7 @@ class RunOutput {
   const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
-  std::string dir_;
+  std::string dir_, shown_dir_;
   std::ostream* log_;
   std::vector<std::string> files_, warnings_;
 };
@@ -56,6 +58,7 @@ class RunOutput {
 /// wall time ("  4.2 of 20 s (21%) after 6 s"), none if the phase ends sooner.
 class ProgressReport {
  public:
+  /// `every_s` = 0: a line for every call (for tests).
   ProgressReport(std::ostream* log, double total_s, double every_s = 2.0);
   /// The phase has covered `t` seconds of simulated time out of `total_s`.
   void update(double t);
@@ -68,6 +71,8 @@ class ProgressReport {
   const char* resume() const { return printed_ ? "  " : ""; }
 
  private:
+  void schedule(double now);  ///< sets when the next line is due
+
   std::ostream* log_;
   double total_s_, every_s_;
   double start_, next_;

@@ -36,6 +36,7 @@ inline constexpr double kMaxCommand = 1e12;                            ///< |loa
 inline constexpr double kMinDirection = 1e-6, kMaxDirection = 1e6;     ///< |direction| of a force element
 inline constexpr double kMaxWeight = 1e12;                             ///< objective and LQR weights
 inline constexpr double kMinInputWeight = 1e-12;                       ///< LQR input weights
+inline constexpr double kMaxInputWeightSpread = 1e12;  ///< largest / smallest input weight (the LQR needs < 1e14)
 inline constexpr double kMaxPosition_m = 1e6, kMaxVelocity_m_s = 1e6;  ///< maneuver states
 inline constexpr double kMaxAngle_deg = 1e6, kMaxRate_deg_s = 1e6;
 }  // namespace design_limits
