@@ -163,8 +163,17 @@ void read_beam(Section& root, Design& d) {
       b.problem("segment", "beam: the segments add up to " + shortest(total) + " m; at most " +
                                shortest(lim::kMaxLength_m) + " m");
   }
-  double length = 0.0;
-  for (const auto& s : p.segments) length += s.length_m;
+  double length = 0.0, total_mass = 0.0;
+  for (const auto& s : p.segments) {
+    length += s.length_m;
+    total_mass += s.mass_per_length_kg_m * s.length_m;
+  }
+  // mass_kg is checked where it is given; a mass that comes from mass per length is checked here
+  if (!p.segments.empty() && (!b.has("mass_kg") || !segs.empty()) &&
+      (total_mass < lim::kMinMass_kg || total_mass > lim::kMaxMass_kg))
+    b.problem(segs.empty() ? "mass_per_length_kg_m" : "segment",
+              "beam: the mass per length gives a beam of " + shortest(total_mass) + " kg; it must be within [" +
+                  shortest(lim::kMinMass_kg) + ", " + shortest(lim::kMaxMass_kg) + "] kg (the supported range)");
   const bool have_length = !p.segments.empty();
   const Range on_beam = have_length ? Range::closed(0.0, length) : Range::nonnegative();
   // o strictly inside, and not within L/1000 of an end: the full model's step count grows

@@ -431,6 +431,12 @@ TEST_CASE("absurd magnitudes are outside the supported range", "[io]") {
   CHECK_THAT(problems_of(kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
                                       "limit = 1e13\n"),
              Contains("line 9: actuator[1].limit = 1e+13, must be at most 1e+12"));
+  // a mass per length within its range can still make a beam too heavy or too light
+  CHECK_THAT(problems_of("[beam]\nlength_m = 10000.0\nmass_per_length_kg_m = 1e6\nbending_stiffness_Nm2 = 1.0\n"),
+             Contains("line 3: beam: the mass per length gives a beam of 1e+10 kg; it must be within [1e-06, 1e+09]"));
+  CHECK_THAT(problems_of("[[beam.segment]]\nlength_m = 0.001\nmass_per_length_kg_m = 1e-5\n"
+                         "bending_stiffness_Nm2 = 1.0\n"),
+             Contains("beam: the mass per length gives a beam of 1e-08 kg"));
   CHECK_THAT(problems_of("[[beam.segment]]\nlength_m = 1.0\nmass_per_length_kg_m = 1e-12\n"
                          "bending_stiffness_Nm2 = 1.0\n"),
              Contains("line 3: beam.segment[1].mass_per_length_kg_m = 1e-12, must be within [1e-06, 1e+06]"));
