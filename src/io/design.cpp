@@ -539,20 +539,17 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
   }
   if (time_objective && !p.free_time && p.w_time > 0.0)
     m.problem("time_weight", m.key_path("time_weight") + " > 0 needs free_duration = true");
-  if (auto w = m.number_array("actuator_weights", kWeight, false)) {
-    if (w->size() != nu && names_ok)
-      m.problem("actuator_weights",
-                m.key_path("actuator_weights") + " needs one entry per actuator (" + std::to_string(nu) + ")");
-    else if (w->size() == nu)
-      p.energy_weights = Eigen::Map<const Eigen::VectorXd>(w->data(), static_cast<Eigen::Index>(w->size()));
-  }
-  if (auto r = m.number_array("rate_limits", kCommand, false)) {
-    if (r->size() != nu && names_ok)
-      m.problem("rate_limits",
-                m.key_path("rate_limits") + " needs one entry per actuator (" + std::to_string(nu) + ")");
-    else if (r->size() == nu)
-      p.du_max = Eigen::Map<const Eigen::VectorXd>(r->data(), static_cast<Eigen::Index>(r->size()));
-  }
+  // An optional array with one entry per actuator, into `target`.
+  auto per_actuator = [&](const char* key, const Range& range, auto& target) {
+    auto v = m.number_array(key, range, false);
+    if (!v) return;
+    if (v->size() == nu)
+      target = Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v->data(), static_cast<Eigen::Index>(v->size())));
+    else if (names_ok)
+      m.problem(key, m.key_path(key) + " needs one entry per actuator (" + std::to_string(nu) + ")");
+  };
+  per_actuator("actuator_weights", kWeight, p.energy_weights);
+  per_actuator("rate_limits", kCommand, p.du_max);
   const std::string tr =
       m.choice("transcription", {"hermite_simpson", "hermite_simpson_compressed", "trapezoidal"}, false)
           .value_or("hermite_simpson");
