@@ -572,6 +572,11 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
             key, ip.key_path(key) + " = \"" + value + "\", must be \"mumps\" (the only linear solver this Ipopt has)");
         continue;
       }
+      if (key == "linear_system_scaling" && lower_trimmed(value) == "mc19") {
+        ip.problem(key, ip.key_path(key) + " = \"" + value +
+                            "\", must be \"none\" or \"slack-based\" (MC19 is part of HSL, which this Ipopt lacks)");
+        continue;
+      }
       // Ipopt opens output_file itself: it goes into the run's directory with the other
       // results (and is replaced with them), so it must be a plain file name.
       if (key == "output_file") {

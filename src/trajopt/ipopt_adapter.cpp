@@ -320,7 +320,11 @@ std::string describe(Ipopt::ApplicationReturnStatus s, const std::string& error)
       msg += "converged to a point of local infeasibility, the maneuver looks unreachable; not a solution";
       break;
     case TrajoptStatus::MaxIterations: msg += "iteration or time limit reached; not a solution"; break;
-    case TrajoptStatus::Failed: msg += "the solver stopped; not a solution"; break;
+    case TrajoptStatus::Failed:
+      msg += s == Ipopt::Invalid_Option
+                 ? "an Ipopt option ([maneuver.ipopt]) names something this Ipopt build lacks; not a solution"
+                 : "the solver stopped; not a solution";
+      break;
   }
   if (!error.empty()) msg += " (evaluation error: " + error + ")";
   return msg;

@@ -349,6 +349,8 @@ TEST_CASE("inputs accepted before but meaningless or fatal later are refused", "
   CHECK_THAT(problems_of(man + "linear_solver = \"ma97\"\n"),
              Contains("line 16: maneuver.ipopt.linear_solver = \"ma97\", must be \"mumps\""));
   CHECK(problems_of(man + "linear_solver = \" MUMPS\"\n").empty());  // Ipopt ignores case and blanks
+  CHECK_THAT(problems_of(man + "linear_system_scaling = \"MC19\"\n"),
+             Contains("line 16: maneuver.ipopt.linear_system_scaling = \"MC19\", must be \"none\" or \"slack-based\""));
   // Ipopt's own log file: a plain name in the output directory, not a path anywhere else
   CHECK(problems_of(man + "output_file = \"ipopt.out\"\n").empty());
   for (const char* bad : {"../ipopt.out", "/tmp/ipopt.out", ".hidden", ""})
