@@ -1,5 +1,6 @@
 // [maneuver]: an optimal rigid maneuver (zero-order model, direct collocation, Ipopt),
 // written as trajectory.csv with figures, and handed to [simulation] as the nominal motion.
+#include <cstdlib>
 #include <iomanip>
 
 #include "freeflex/app/run.hpp"
@@ -34,15 +35,26 @@ ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary
     *log << "maneuver: " << to_string(opt.transcription) << ", " << opt.intervals << " intervals, "
          << (st.problem.free_time ? "free" : "fixed") << " duration" << (opt.verbose ? " (Ipopt log follows)" : " ...")
          << std::endl;
-  // [maneuver.ipopt] output_file names a file in the run's directory (the design checked the name).
+  // [maneuver.ipopt] output_file names a file in the run's directory (the design checked
+  // the name). Ipopt would rewrite it at each solve, keeping the last mesh-refinement round
+  // only: freeflex collects the log of every round and writes it itself.
   std::string ipopt_file;
-  for (auto& [key, value] : opt.ipopt_options)
-    if (key == "output_file") {
-      ipopt_file = value;
-      value = out.dir() + "/" + value;
+  for (auto it = opt.ipopt_options.begin(); it != opt.ipopt_options.end();) {
+    if (it->first == "output_file") {
+      ipopt_file = it->second;
+      it = opt.ipopt_options.erase(it);
+      continue;
     }
+    if (it->first == "file_print_level") {  // still passed on: Ipopt checks the value
+      char* end = nullptr;
+      const long level = std::strtol(it->second.c_str(), &end, 10);
+      if (end && *end == '\0' && level >= 0 && level <= 12) opt.log_level = static_cast<int>(level);
+    }
+    ++it;
+  }
+  if (!ipopt_file.empty()) opt.keep_log = true;
   const TrajoptResult r = solve_maneuver(body, st.problem, opt);
-  if (!ipopt_file.empty()) out.adopt(ipopt_file);
+  if (!ipopt_file.empty()) out.write(ipopt_file, r.log);
   if (log)
     *log << "maneuver: " << to_string(r.status) << " after " << r.iterations << " iterations, " << std::fixed
          << std::setprecision(3) << r.solve_time_s << " s; objective " << std::defaultfloat << r.objective

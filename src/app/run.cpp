@@ -21,8 +21,20 @@
 
 namespace freeflex {
 
+/// `text` with the (staging) directory replaced by the one the files end up in.
+std::string RunOutput::shown(std::string text) const {
+  if (shown_dir_ == dir_) return text;
+  for (std::size_t at = text.find(dir_); at != std::string::npos; at = text.find(dir_, at + shown_dir_.size()))
+    text.replace(at, dir_.size(), shown_dir_);
+  return text;
+}
+
 void RunOutput::write(const std::string& name, const std::string& content) {
-  write_file_atomic(dir_ + "/" + name, content);
+  try {
+    write_file_atomic(dir_ + "/" + name, content);
+  } catch (const IoError& e) {
+    throw IoError(shown(e.what()));  // the staging directory is gone once the run ends
+  }
   files_.push_back(name);
 }
 
@@ -30,18 +42,9 @@ void RunOutput::csv(const std::string& name, const std::vector<std::string>& hea
   write(name, csv_text(header, data));
 }
 
-void RunOutput::adopt(const std::string& name) {
-  struct stat st {};
-  if (::stat((dir_ + "/" + name).c_str(), &st) == 0 && S_ISREG(st.st_mode) &&
-      std::find(files_.begin(), files_.end(), name) == files_.end())
-    files_.push_back(name);
-}
-
 void RunOutput::plot(const PlotSpec& spec, bool enabled) {
   if (!enabled) return;
-  std::string why = render_plot(spec, dir_);
-  for (std::size_t at = why.find(dir_); !why.empty() && at != std::string::npos; at = why.find(dir_, at))
-    why.replace(at, dir_.size(), shown_dir_);  // the staging directory is gone once the run ends
+  const std::string why = shown(render_plot(spec, dir_));
   files_.push_back(spec.name + ".gp");
   if (why.empty()) files_.push_back(spec.name + ".png");
   else warn("figure " + spec.name + ".png not drawn: " + why);
@@ -156,10 +159,15 @@ std::vector<std::string> read_manifest(const std::string& dir) {
   return names;
 }
 
-void write_manifest(const std::string& dir, const std::set<std::string>& names) {
+/// Replaces DIR's manifest, going through a file in `staging` so that a run killed while
+/// writing leaves nothing in DIR that no later run would remove.
+void write_manifest(const std::string& staging, const std::string& dir, const std::set<std::string>& names) {
   std::string text;
   for (const auto& f : names) text += f + "\n";
-  write_file_atomic(dir + "/" + kManifest, text);
+  const std::string next = staging + "/" + kManifest;
+  write_file_atomic(next, text);
+  if (std::rename(next.c_str(), (dir + "/" + kManifest).c_str()) != 0)
+    throw IoError("cannot write '" + dir + "/" + kManifest + "': " + std::strerror(errno));
 }
 
 /// An exclusive lock on DIR for the life of one run; a second run into DIR fails at once.
@@ -197,7 +205,12 @@ void remove_stale_staging(const std::string& dir) {
     if (name.rfind(kStagingPrefix, 0) == 0) stale.push_back(dir + "/" + name);
   }
   ::closedir(d);
-  for (const auto& s : stale) remove_flat_dir(s);
+  for (const auto& s : stale) {
+    struct stat st {};
+    if (::lstat(s.c_str(), &st) != 0) continue;
+    if (S_ISDIR(st.st_mode)) remove_flat_dir(s);
+    else ::unlink(s.c_str());  // a file or a link by that name: the link goes, never what it points to
+  }
 }
 
 /// Moves every file of `staging` into `dir`, replacing the previous run's files; returns
@@ -210,7 +223,7 @@ std::size_t commit(const std::string& staging, const std::string& dir) {
   std::set<std::string> either(keep);
   either.insert(old.begin(), old.end());
   either.insert("summary.json");
-  write_manifest(dir, either);
+  write_manifest(staging, dir, either);
   std::remove((dir + "/summary.json").c_str());  // until the new one is in, DIR claims nothing
   for (const auto& f : old)
     if (!keep.count(f)) std::remove((dir + "/" + f).c_str());
@@ -221,7 +234,7 @@ std::size_t commit(const std::string& staging, const std::string& dir) {
   };
   for (const auto& f : fresh)
     if (f != "summary.json") move(f);
-  write_manifest(dir, keep);
+  write_manifest(staging, dir, keep);
   if (keep.count("summary.json")) move("summary.json");
   ::rmdir(staging.c_str());
   return fresh.size();
@@ -266,7 +279,9 @@ int run_design(const Design& design, const RunOptions& options) {
       *options.log << "results: " << options.out_dir << " (" << n << " files, summary.json)\n";
     return code;
   } catch (const IoError&) {
-    remove_flat_dir(staging);  // before the commit: the previous results stay as they were
+    // Before the commit the previous results stay as they were; during it, the manifest
+    // lists the files of both runs, and the next run clears them.
+    remove_flat_dir(staging);
     throw;
   } catch (const std::invalid_argument&) {
     remove_flat_dir(staging);  // bad input found late: nothing is written (exit 2)

@@ -84,8 +84,8 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
     // A fixed duration was checked with the design; a free one is the optimizer's choice.
     if (maneuver->duration_s > st.horizon_s) {
       out.warn("controller.horizon_s = " + num(st.horizon_s) + " is shorter than the optimized maneuver (" +
-               num(maneuver->duration_s) + " s): no feedback was designed; raise horizon_s to at least the "
-               "maneuver's t_max_s");
+               num(maneuver->duration_s) + " s): no feedback was designed; raise horizon_s to at least "
+               "maneuver.duration_max_s");
       Json j = Json::object();
       j["status"] = "horizon shorter than the maneuver";
       summary["suppression"] = j;
@@ -183,8 +183,12 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
     // the attitude it produces, so only the simulated rotation can show it is not positive.
     const bool turns = std::isfinite(rotation) && rotation > 0.0;
     if (!turns) {
-      out.warn("[bang_bang]: the nominal motion turns the beam by " + num(rotation) + " rad by t = " + num(t_end) +
-               " s; bang-bang rotations need a positive angle, so none was designed");
+      const std::string why = "the nominal motion turns the beam by " + num(rotation) + " rad by t = " + num(t_end) +
+                              " s; bang-bang rotations need a positive angle";
+      out.warn("[bang_bang]: " + why + ", so none was designed");
+      Json e = Json::object();
+      e["status"] = why;
+      jb.push_back(e);
       code = kExitNumericalFailure;
     }
     for (int k : turns ? bb.modes : std::vector<int>{}) {

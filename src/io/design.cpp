@@ -687,9 +687,14 @@ void read_controller(Section& root, Design& d, Outputs& outputs) {
     c.problem("actuators",
               "[controller] needs a nominal motion whose vibration it suppresses: add a [[load]] or a "
               "[maneuver]");
-  if (d.maneuver && !d.maneuver->problem.free_time && horizon && st.horizon_s < d.maneuver->problem.duration_s)
-    c.problem("horizon_s", c.key_path("horizon_s") + " = " + shortest(st.horizon_s) + ", shorter than the maneuver (" +
-                               "maneuver.duration_s = " + shortest(d.maneuver->problem.duration_s) + ")");
+  if (d.maneuver && horizon) {
+    const ManeuverProblem& p = d.maneuver->problem;
+    const double shortest_maneuver = p.free_time ? p.t_min_s : p.duration_s;
+    if (st.horizon_s < shortest_maneuver)
+      c.problem("horizon_s", c.key_path("horizon_s") + " = " + shortest(st.horizon_s) + ", shorter than the maneuver (" +
+                                 (p.free_time ? "maneuver.duration_min_s = " : "maneuver.duration_s = ") +
+                                 shortest(shortest_maneuver) + ")");
+  }
   if (!d.loads.empty() && !d.maneuver) {
     const double end = loads_end(d);
     if (horizon && st.horizon_s < end)

@@ -257,7 +257,9 @@ IpoptRun run_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const T
   }
   const bool capture = o.keep_log || (check_derivatives && o.derivative_test != "none");
   if (capture) {
-    Ipopt::SmartPtr<Ipopt::Journal> j = new StringJournal(Ipopt::J_ITERSUMMARY, &run.log);
+    const int level = check_derivatives && o.derivative_test != "none" ? std::max(o.log_level, int{Ipopt::J_ITERSUMMARY})
+                                                                        : std::clamp(o.log_level, 0, int{Ipopt::J_ALL});
+    Ipopt::SmartPtr<Ipopt::Journal> j = new StringJournal(static_cast<Ipopt::EJournalLevel>(level), &run.log);
     app->Jnlst()->AddJournal(j);
   }
   Ipopt::SmartPtr<CollocationTnlp> tnlp = new CollocationTnlp(nlp, w0);

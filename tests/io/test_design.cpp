@@ -216,6 +216,12 @@ TEST_CASE("controller keys load, bad weights, horizons and names are reported", 
   CHECK(problems_of(man + "horizon_s = 3.0\n").empty());
   CHECK_THAT(problems_of(man + "horizon_s = 2.5\n"),
              Contains("line 17: controller.horizon_s = 2.5, shorter than the maneuver (maneuver.duration_s = 3)"));
+  const std::string free = kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
+                           "limit = 1.0\n[maneuver]\nactuators = [\"hub\"]\nfree_duration = true\n"
+                           "duration_min_s = 2.0\n[maneuver.final]\ntheta_deg = 90.0\n[controller]\nactuators = [\"hub\"]\n";
+  CHECK(problems_of(free + "horizon_s = 3.0\n").empty());  // the optimizer may still choose longer: checked then
+  CHECK_THAT(problems_of(free + "horizon_s = 1.5\n"),
+             Contains("line 18: controller.horizon_s = 1.5, shorter than the maneuver (maneuver.duration_min_s = 2)"));
   CHECK_THAT(problems_of(kPaperBeam + acts + "[controller]\nactuators = [\"rudder\"]\nhorizon_s = 3.0\n"),
              Contains("line 20: controller.actuators: \"rudder\" is not an [[actuator]] (known: 'hub')"));
 }

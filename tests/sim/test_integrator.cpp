@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "freeflex/sim/integrator.hpp"
+#include "sim/fast_nvector.hpp"
 
 using freeflex::Instant;
 using freeflex::integrate;
@@ -425,9 +426,11 @@ extern "C" int plain_rhs(sunrealtype, N_Vector y, N_Vector yd, void*) {
 }
 }  // namespace
 
-TEST_CASE("integrate takes CVODES's own steps: its vector kernels and error weights change no bit", "[sim]") {
-  // freeflex gives CVODES compiled vector kernels and its own error-weight function; both
-  // must reproduce what CVODES computes by itself, so the two runs agree bit for bit.
+TEST_CASE("integrate takes the steps of plain CVODES: its error-weight function changes no bit", "[sim]") {
+  // freeflex gives CVODES its own error-weight function, which must compute what
+  // CVodeSStolerances / CVodeSVtolerances would. The plain run below gets the same compiled
+  // vector kernels (whose weighted norm sums in another order than SUNDIALS'), so the
+  // weights are the only difference left, and the two runs must agree bit for bit.
   const std::vector<double> times = linspace(0.0, 2.0, 41);
   const double x0[4] = {1.0, 0.05, 0.0, 0.0};
   const double rtol = 1e-8, atol = 1e-10;
@@ -435,6 +438,7 @@ TEST_CASE("integrate takes CVODES's own steps: its vector kernels and error weig
   SUNContext ctx = nullptr;
   REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
   N_Vector y = N_VNew_Serial(4, ctx);
+  freeflex::use_compiled_vector_kernels(y);
   for (int i = 0; i < 4; ++i) NV_Ith_S(y, i) = x0[i];
   void* mem = CVodeCreate(CV_ADAMS, ctx);
   REQUIRE(CVodeInit(mem, plain_rhs, 0.0, y) == CV_SUCCESS);
@@ -471,4 +475,49 @@ TEST_CASE("integrate takes CVODES's own steps: its vector kernels and error weig
   CHECK(r.steps == plain_steps);
   CHECK(plain_steps > 500);  // enough steps for any difference in a weight to change one
   CHECK((r.x.array() == plain.array()).all());  // bit for bit: no tolerance
+
+  // Per-component atol (a change of variables that sets atol_scale; here the identity)
+  // against CVodeSVtolerances.
+  const double scale[4] = {1.0, 0.01, 3.0, 0.5};
+  ctx = nullptr;
+  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
+  y = N_VNew_Serial(4, ctx);
+  freeflex::use_compiled_vector_kernels(y);
+  N_Vector abstol = N_VClone(y);
+  for (int i = 0; i < 4; ++i) {
+    NV_Ith_S(y, i) = x0[i];
+    NV_Ith_S(abstol, i) = atol * scale[i];
+  }
+  mem = CVodeCreate(CV_ADAMS, ctx);
+  REQUIRE(CVodeInit(mem, plain_rhs, 0.0, y) == CV_SUCCESS);
+  REQUIRE(CVodeSVtolerances(mem, rtol, abstol) == CV_SUCCESS);
+  nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
+  REQUIRE(CVodeSetNonlinearSolver(mem, nls) == CV_SUCCESS);
+  REQUIRE(CVodeSetStopTime(mem, times.back()) == CV_SUCCESS);
+  for (std::size_t k = 1; k < times.size(); ++k) {
+    sunrealtype t = 0.0;
+    REQUIRE(CVode(mem, times[k], y, &t, CV_NORMAL) >= 0);
+    for (int i = 0; i < 4; ++i) plain(static_cast<Eigen::Index>(k), i) = NV_Ith_S(y, i);
+  }
+  CVodeGetNumSteps(mem, &plain_steps);
+  CVodeFree(&mem);
+  SUNNonlinSolFree(nls);
+  N_VDestroy(abstol);
+  N_VDestroy(y);
+  SUNContext_Free(&ctx);
+
+  sys.variables.enter_piece = [](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                 Eigen::Ref<Eigen::VectorXd> yv) {
+    yv = x;
+    return true;
+  };
+  sys.variables.to_x = [](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& yv, Eigen::Ref<Eigen::VectorXd> x) {
+    x = yv;
+  };
+  sys.variables.atol_scale = Eigen::Map<const Eigen::VectorXd>(scale, 4);
+  const auto rs = integrate(sys, Eigen::Map<const Eigen::VectorXd>(x0, 4), times, {}, o);
+  REQUIRE(rs.ok);
+  CHECK(rs.steps == plain_steps);
+  CHECK(rs.steps != r.steps);  // the scaled atol does change the steps
+  CHECK((rs.x.array() == plain.array()).all());
 }

@@ -38,8 +38,6 @@ class RunOutput {
       : dir_(std::move(dir)), shown_dir_(shown_dir.empty() ? dir_ : std::move(shown_dir)), log_(log) {}
   void write(const std::string& name, const std::string& content);
   void csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data);
-  /// Counts `name`, which a library wrote into dir() itself, among the run's files (if it is there).
-  void adopt(const std::string& name);
   /// Renders a plot (unless plots are off); a failure becomes a warning, not an error.
   void plot(const PlotSpec& spec, bool enabled);
   void warn(const std::string& message);
@@ -49,6 +47,8 @@ class RunOutput {
   const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
+  std::string shown(std::string text) const;
+
   std::string dir_, shown_dir_;
   std::ostream* log_;
   std::vector<std::string> files_, warnings_;

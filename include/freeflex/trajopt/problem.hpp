@@ -103,7 +103,8 @@ struct TrajoptOptions {
   /// registered type (integer, number or string). Unknown names or unparsable values throw.
   std::vector<std::pair<std::string, std::string>> ipopt_options;
   InitialGuess guess;
-  bool keep_log = false;  ///< copy Ipopt's log (print_level 5) into TrajoptResult::log
+  bool keep_log = false;  ///< copy Ipopt's log (of every solve) into TrajoptResult::log
+  int log_level = 5;      ///< Ipopt print level of that copy (0-12)
 };
 
 /// Throws std::invalid_argument listing every problem found (sizes, ranges, orderings).
