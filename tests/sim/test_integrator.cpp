@@ -424,41 +424,52 @@ extern "C" int plain_rhs(sunrealtype, N_Vector y, N_Vector yd, void*) {
   two_oscillators(N_VGetArrayPointer(y), N_VGetArrayPointer(yd));
   return 0;
 }
+/// Plain CVODES (Adams, fixed-point iteration) on two_oscillators with freeflex's vector
+/// kernels and CVODES's own error weights: SS tolerances, or SV with atol_i = atol * scale_i.
+Eigen::MatrixXd plain_cvodes(const std::vector<double>& times, const double* x0, double rtol, double atol,
+                             const double* scale, long& steps) {
+  SUNContext ctx = nullptr;
+  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
+  N_Vector y = N_VNew_Serial(4, ctx);
+  freeflex::use_compiled_vector_kernels(y);
+  N_Vector abstol = N_VClone(y);
+  for (int i = 0; i < 4; ++i) {
+    NV_Ith_S(y, i) = x0[i];
+    NV_Ith_S(abstol, i) = scale ? atol * scale[i] : atol;
+  }
+  void* mem = CVodeCreate(CV_ADAMS, ctx);
+  REQUIRE(CVodeInit(mem, plain_rhs, 0.0, y) == CV_SUCCESS);
+  REQUIRE((scale ? CVodeSVtolerances(mem, rtol, abstol) : CVodeSStolerances(mem, rtol, atol)) == CV_SUCCESS);
+  SUNNonlinearSolver nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
+  REQUIRE(CVodeSetNonlinearSolver(mem, nls) == CV_SUCCESS);
+  REQUIRE(CVodeSetStopTime(mem, times.back()) == CV_SUCCESS);
+  Eigen::MatrixXd x(times.size(), 4);
+  for (int i = 0; i < 4; ++i) x(0, i) = x0[i];
+  for (std::size_t k = 1; k < times.size(); ++k) {
+    sunrealtype t = 0.0;
+    REQUIRE(CVode(mem, times[k], y, &t, CV_NORMAL) >= 0);
+    for (int i = 0; i < 4; ++i) x(static_cast<Eigen::Index>(k), i) = NV_Ith_S(y, i);
+  }
+  CVodeGetNumSteps(mem, &steps);
+  CVodeFree(&mem);
+  SUNNonlinSolFree(nls);
+  N_VDestroy(abstol);
+  N_VDestroy(y);
+  SUNContext_Free(&ctx);
+  return x;
+}
 }  // namespace
 
 TEST_CASE("integrate takes the steps of plain CVODES: its error-weight function changes no bit", "[sim]") {
   // freeflex gives CVODES its own error-weight function, which must compute what
-  // CVodeSStolerances / CVodeSVtolerances would. The plain run below gets the same compiled
+  // CVodeSStolerances / CVodeSVtolerances would. The plain run gets the same compiled
   // vector kernels (whose weighted norm sums in another order than SUNDIALS'), so the
   // weights are the only difference left, and the two runs must agree bit for bit.
   const std::vector<double> times = linspace(0.0, 2.0, 41);
   const double x0[4] = {1.0, 0.05, 0.0, 0.0};
   const double rtol = 1e-8, atol = 1e-10;
-
-  SUNContext ctx = nullptr;
-  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
-  N_Vector y = N_VNew_Serial(4, ctx);
-  freeflex::use_compiled_vector_kernels(y);
-  for (int i = 0; i < 4; ++i) NV_Ith_S(y, i) = x0[i];
-  void* mem = CVodeCreate(CV_ADAMS, ctx);
-  REQUIRE(CVodeInit(mem, plain_rhs, 0.0, y) == CV_SUCCESS);
-  REQUIRE(CVodeSStolerances(mem, rtol, atol) == CV_SUCCESS);
-  SUNNonlinearSolver nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
-  REQUIRE(CVodeSetNonlinearSolver(mem, nls) == CV_SUCCESS);
-  REQUIRE(CVodeSetStopTime(mem, times.back()) == CV_SUCCESS);
-  Eigen::MatrixXd plain(times.size(), 4);
-  for (int i = 0; i < 4; ++i) plain(0, i) = x0[i];
-  for (std::size_t k = 1; k < times.size(); ++k) {
-    sunrealtype t = 0.0;
-    REQUIRE(CVode(mem, times[k], y, &t, CV_NORMAL) >= 0);
-    for (int i = 0; i < 4; ++i) plain(static_cast<Eigen::Index>(k), i) = NV_Ith_S(y, i);
-  }
   long plain_steps = 0;
-  CVodeGetNumSteps(mem, &plain_steps);
-  CVodeFree(&mem);
-  SUNNonlinSolFree(nls);
-  N_VDestroy(y);
-  SUNContext_Free(&ctx);
+  const Eigen::MatrixXd plain = plain_cvodes(times, x0, rtol, atol, nullptr, plain_steps);
 
   OdeSystem sys;
   sys.dim = 4;
@@ -476,36 +487,9 @@ TEST_CASE("integrate takes the steps of plain CVODES: its error-weight function 
   CHECK(plain_steps > 500);  // enough steps for any difference in a weight to change one
   CHECK((r.x.array() == plain.array()).all());  // bit for bit: no tolerance
 
-  // Per-component atol (a change of variables that sets atol_scale; here the identity)
-  // against CVodeSVtolerances.
+  // Per-component atol (a change of variables that sets atol_scale; here the identity).
   const double scale[4] = {1.0, 0.01, 3.0, 0.5};
-  ctx = nullptr;
-  REQUIRE(SUNContext_Create(nullptr, &ctx) == 0);
-  y = N_VNew_Serial(4, ctx);
-  freeflex::use_compiled_vector_kernels(y);
-  N_Vector abstol = N_VClone(y);
-  for (int i = 0; i < 4; ++i) {
-    NV_Ith_S(y, i) = x0[i];
-    NV_Ith_S(abstol, i) = atol * scale[i];
-  }
-  mem = CVodeCreate(CV_ADAMS, ctx);
-  REQUIRE(CVodeInit(mem, plain_rhs, 0.0, y) == CV_SUCCESS);
-  REQUIRE(CVodeSVtolerances(mem, rtol, abstol) == CV_SUCCESS);
-  nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
-  REQUIRE(CVodeSetNonlinearSolver(mem, nls) == CV_SUCCESS);
-  REQUIRE(CVodeSetStopTime(mem, times.back()) == CV_SUCCESS);
-  for (std::size_t k = 1; k < times.size(); ++k) {
-    sunrealtype t = 0.0;
-    REQUIRE(CVode(mem, times[k], y, &t, CV_NORMAL) >= 0);
-    for (int i = 0; i < 4; ++i) plain(static_cast<Eigen::Index>(k), i) = NV_Ith_S(y, i);
-  }
-  CVodeGetNumSteps(mem, &plain_steps);
-  CVodeFree(&mem);
-  SUNNonlinSolFree(nls);
-  N_VDestroy(abstol);
-  N_VDestroy(y);
-  SUNContext_Free(&ctx);
-
+  const Eigen::MatrixXd plain_sv = plain_cvodes(times, x0, rtol, atol, scale, plain_steps);
   sys.variables.enter_piece = [](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x,
                                  Eigen::Ref<Eigen::VectorXd> yv) {
     yv = x;
@@ -519,5 +503,5 @@ TEST_CASE("integrate takes the steps of plain CVODES: its error-weight function 
   REQUIRE(rs.ok);
   CHECK(rs.steps == plain_steps);
   CHECK(rs.steps != r.steps);  // the scaled atol does change the steps
-  CHECK((rs.x.array() == plain.array()).all());
+  CHECK((rs.x.array() == plain_sv.array()).all());
 }
