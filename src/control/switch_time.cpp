@@ -48,35 +48,48 @@ struct TargetModes {
 };
 
 TargetModes target_modes(const FlexibleBody& body, int actuator, double theta, int modes, const std::string& where) {
-  const int N = body.dofs(), n = body.n();
-  TargetModes t;
-  t.M0.resize(N, N);
-  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
-  body.mass_matrix(theta, q0, t.M0);
-  Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(N, N);
-  K0.bottomRightCorner(n, n) = body.integrals().K;
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K0, t.M0);
-  Eigen::VectorXd g(N);
-  body.element_force(actuator, theta, q0, g);
-  const Eigen::VectorXd p = es.eigenvectors().rightCols(n).transpose() * g;
-  const double pmax = p.cwiseAbs().maxCoeff();
-  std::vector<int> idx;
-  for (int j = 0; j < n && static_cast<int>(idx.size()) < modes; ++j)
-    if (std::abs(p(j)) > 1e-8 * pmax) idx.push_back(j);
-  if (static_cast<int>(idx.size()) < modes)
-    throw std::invalid_argument(where + ": the actuator excites only " + std::to_string(idx.size()) +
+  const int N = body.dofs();
+  ExcitedModes em = excited_modes(body, actuator, theta);
+  if (static_cast<int>(em.excited.size()) < modes)
+    throw std::invalid_argument(where + ": the actuator excites only " + std::to_string(em.excited.size()) +
                                 " elastic modes of this basis, asked for modes = " + std::to_string(modes));
-  const int k = static_cast<int>(idx.size());
-  t.omega.resize(k);
-  t.participation.resize(k);
-  t.shapes.resize(N, k);
-  for (int i = 0; i < k; ++i) {
-    t.omega(i) = std::sqrt(std::max(0.0, es.eigenvalues()(3 + idx[i])));
-    t.participation(i) = p(idx[i]);
-    t.shapes.col(i) = es.eigenvectors().col(3 + idx[i]);
+  TargetModes t;
+  t.omega.resize(modes);
+  t.participation.resize(modes);
+  t.shapes.resize(N, modes);
+  for (int i = 0; i < modes; ++i) {
+    const int j = em.excited[static_cast<std::size_t>(i)];
+    t.omega(i) = std::sqrt(std::max(0.0, em.eigenvalues(3 + j)));
+    t.participation(i) = em.participation(j);
+    t.shapes.col(i) = em.eigenvectors.col(3 + j);
   }
+  t.M0 = std::move(em.M0);
   return t;
 }
+
+}  // namespace
+
+ExcitedModes excited_modes(const FlexibleBody& body, int element, double theta) {
+  const int N = body.dofs(), n = body.n();
+  ExcitedModes m;
+  m.M0.resize(N, N);
+  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
+  body.mass_matrix(theta, q0, m.M0);
+  Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(N, N);
+  K0.bottomRightCorner(n, n) = body.integrals().K;
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K0, m.M0);
+  m.eigenvalues = es.eigenvalues();
+  m.eigenvectors = es.eigenvectors();
+  Eigen::VectorXd g(N);
+  body.element_force(element, theta, q0, g);
+  m.participation = m.eigenvectors.rightCols(n).transpose() * g;
+  const double pmax = m.participation.cwiseAbs().maxCoeff();
+  for (int j = 0; j < n; ++j)
+    if (std::abs(m.participation(j)) > 1e-8 * pmax) m.excited.push_back(j);
+  return m;
+}
+
+namespace {
 
 std::vector<double> switches_of(const std::vector<double>& durations, double& T) {
   std::vector<double> s;

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "design_reader.hpp"
+#include "freeflex/control/switch_time.hpp"
 #include "freeflex/dynamics/flexible_body.hpp"
 #include "freeflex/model/basis.hpp"
 
@@ -742,26 +743,6 @@ void read_controller(Section& root, Design& d, Outputs& outputs) {
   d.controller = st;
 }
 
-/// Elastic modes that element `e` excites at rest, counted as design_switch_times counts
-/// them (src/control/switch_time.cpp, target_modes): participation |vᵀ g| above 1e-8 of
-/// the largest.
-int excited_modes(const FlexibleBody& body, int e) {
-  const int N = body.dofs(), n = body.n();
-  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
-  Eigen::MatrixXd M0(N, N);
-  body.mass_matrix(0.0, q0, M0);
-  Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(N, N);
-  K0.bottomRightCorner(n, n) = body.integrals().K;
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K0, M0);
-  Eigen::VectorXd g(N);
-  body.element_force(e, 0.0, q0, g);
-  const Eigen::VectorXd p = es.eigenvectors().rightCols(n).transpose() * g;
-  const double pmax = p.cwiseAbs().maxCoeff();
-  int count = 0;
-  for (int j = 0; j < n; ++j)
-    if (std::abs(p(j)) > 1e-8 * pmax) ++count;
-  return count;
-}
 
 /// ∫_0^T (T - s) v(s) ds for a load profile (zero outside its times): I_o θ(T) for a
 /// moment M(s) = v(s) from rest.
@@ -805,7 +786,7 @@ void check_bang_bang_body(Section& b, const Design& d) {
                               " m from the left end), but beam.reference_m puts it at " + shortest(s_o) + " m");
     return;
   }
-  const int excited = excited_modes(body, st.actuator);
+  const int excited = static_cast<int>(excited_modes(body, st.actuator).excited.size());
   for (int k : st.modes)
     if (k > excited) {
       b.problem("modes", b.key_path("modes") + " contains " + std::to_string(k) + ", but \"" + st.actuator_name +

@@ -107,6 +107,18 @@ struct SwitchTimeResult {
   double torque_limit_Nm = 0.0;
 };
 
+/// The elastic modes of the model at rest (eq. 4.1, attitude `theta`) and those that
+/// element `element` excites there: participation |vᵀ g| above 1e-8 of the largest. The
+/// bang-bang design targets the first k of them; the design file is checked against them.
+struct ExcitedModes {
+  Eigen::MatrixXd M0;             ///< 𝕄0 at theta (N x N)
+  Eigen::VectorXd eigenvalues;    ///< of (K0, 𝕄0): three rigid (round-off), then ω² ascending
+  Eigen::MatrixXd eigenvectors;   ///< 𝕄0-normalized, one column per eigenvalue
+  Eigen::VectorXd participation;  ///< vᵀ g of each elastic mode (size n)
+  std::vector<int> excited;       ///< elastic modes (0 = the lowest) above the threshold
+};
+ExcitedModes excited_modes(const FlexibleBody& body, int element, double theta = 0.0);
+
 /// Throws std::invalid_argument (before any work) if the actuator is not an element of
 /// the body, not a torque, not at o, if S_o != 0, or for Δθ, τmax, k, tolerances out of range.
 SwitchTimeResult design_switch_times(const FlexibleBody& body, const SwitchTimeOptions& options);
