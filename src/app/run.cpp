@@ -39,7 +39,12 @@ void RunOutput::write(const std::string& name, const std::string& content) {
 }
 
 void RunOutput::csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data) {
-  write(name, csv_text(header, data));
+  try {
+    write_file_atomic(dir_ + "/" + name, [&](std::ostream& os) { write_csv(os, header, data); });
+  } catch (const IoError& e) {
+    throw IoError(shown(e.what()));
+  }
+  files_.push_back(name);
 }
 
 void RunOutput::plot(const PlotSpec& spec, bool enabled) {

@@ -12,16 +12,24 @@
 
 namespace freeflex {
 
-void write_file_atomic(const std::string& path, const std::string& content) {
+void write_file_atomic(const std::string& path, const std::function<void(std::ostream&)>& writer) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw IoError("cannot write '" + path + "': " + std::strerror(errno));
-    out << content;
+    try {
+      writer(out);
+    } catch (...) {
+      out.close();
+      std::remove(tmp.c_str());
+      throw;
+    }
     out.flush();
     if (!out) {
+      const std::string why = std::strerror(errno);
+      out.close();
       std::remove(tmp.c_str());
-      throw IoError("cannot write '" + path + "': " + std::strerror(errno));
+      throw IoError("cannot write '" + path + "': " + why);
     }
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
@@ -31,25 +39,30 @@ void write_file_atomic(const std::string& path, const std::string& content) {
   }
 }
 
-std::string csv_text(const std::vector<std::string>& header, const Eigen::MatrixXd& data) {
+void write_file_atomic(const std::string& path, const std::string& content) {
+  write_file_atomic(path, [&content](std::ostream& os) { os << content; });
+}
+
+void write_csv(std::ostream& os, const std::vector<std::string>& header, const Eigen::MatrixXd& data) {
   if (static_cast<Eigen::Index>(header.size()) != data.cols())
-    throw std::invalid_argument("csv_text: expected " + std::to_string(data.cols()) + " column names, got " +
+    throw std::invalid_argument("write_csv: expected " + std::to_string(data.cols()) + " column names, got " +
                                 std::to_string(header.size()));
-  std::ostringstream os;
   for (std::size_t j = 0; j < header.size(); ++j) os << (j ? "," : "") << header[j];
   os << '\n';
-  for (Eigen::Index i = 0; i < data.rows(); ++i) {
+  std::string line;
+  for (Eigen::Index i = 0; i < data.rows() && os; ++i) {
+    line.clear();
     for (Eigen::Index j = 0; j < data.cols(); ++j) {
-      if (j) os << ',';
+      if (j) line += ',';
       if (!std::isnan(data(i, j))) {
         char buf[32];  // shortest text that reads back to the same double
         const auto res = std::to_chars(buf, buf + sizeof buf, data(i, j));
-        os.write(buf, res.ptr - buf);
+        line.append(buf, res.ptr);
       }  // NaN marks "not available": empty cell
     }
-    os << '\n';
+    line += '\n';
+    os.write(line.data(), static_cast<std::streamsize>(line.size()));
   }
-  return os.str();
 }
 
 Json Json::from(const Eigen::VectorXd& v) {

@@ -1,0 +1,48 @@
+// Result files: CSV text and the all-or-nothing file writer.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "freeflex/io/output.hpp"
+
+using namespace freeflex;
+
+TEST_CASE("CSV rows use the shortest digits that read back to the same double, and NaN is an empty cell", "[io]") {
+  Eigen::MatrixXd data(2, 3);
+  data << 0.1, -2.5e-300, std::numeric_limits<double>::quiet_NaN(), 1.0 / 3.0, 0.0, 1e22;
+  std::ostringstream os;
+  write_csv(os, {"t", "a", "b"}, data);
+  CHECK(os.str() == "t,a,b\n0.1,-2.5e-300,\n0.3333333333333333,0,1e+22\n");
+  CHECK(std::stod("0.3333333333333333") == 1.0 / 3.0);  // round trip
+  CHECK_THROWS_AS(write_csv(os, {"t"}, data), std::invalid_argument);
+}
+
+TEST_CASE("a file is replaced whole or not at all", "[io]") {
+  const std::string dir = (std::filesystem::temp_directory_path() / "freeflex_test_output").string();
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/r.csv";
+  write_file_atomic(path, "old\n");
+  // A writer that fails half way leaves the old file and no temporary behind.
+  CHECK_THROWS_AS(write_file_atomic(path,
+                                    [](std::ostream& os) {
+                                      os << "half";
+                                      throw std::runtime_error("computation failed");
+                                    }),
+                  std::runtime_error);
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  CHECK(ss.str() == "old\n");
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++entries;
+  CHECK(entries == 1);
+  // A directory that does not exist: IoError naming the path.
+  CHECK_THROWS_AS(write_file_atomic(dir + "/missing/r.csv", "x"), IoError);
+  std::filesystem::remove_all(dir);
+}
