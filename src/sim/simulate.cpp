@@ -31,6 +31,31 @@ std::vector<double> breakpoints_within(const Excitation& ex, double t_end) {
   return b;
 }
 
+/// The nominal motion as the first-order simulation asks for it: its model and its modal
+/// variables both need the state at the time of each right-hand side call, so the last
+/// one is kept (one simulation, one thread).
+class LastStateCache : public RigidTrajectory {
+ public:
+  explicit LastStateCache(std::shared_ptr<const RigidTrajectory> inner) : inner_(std::move(inner)) {}
+  RigidState at(const Instant& when) const override {
+    if (!(valid_ && when.t == last_.t && when.piece_mid == last_.piece_mid)) {
+      state_ = inner_->at(when);
+      last_ = when;
+      valid_ = true;
+    }
+    return state_;
+  }
+  double t_begin() const override { return inner_->t_begin(); }
+  double t_end() const override { return inner_->t_end(); }
+  std::vector<double> breakpoints() const override { return inner_->breakpoints(); }
+
+ private:
+  std::shared_ptr<const RigidTrajectory> inner_;
+  mutable Instant last_{0.0, 0.0};
+  mutable RigidState state_;
+  mutable bool valid_ = false;
+};
+
 /// With modal variables, replaces `sys` by the modal system over it; the returned object
 /// must outlive the integration (null for physical variables: `sys` is left as it is).
 std::unique_ptr<ModalVariables> use_variables(SimulationOptions::Variables v, const FlexibleBody& body,
@@ -196,7 +221,8 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
   }
 
   // 2. First-order motion about it, open loop (u1 = 0).
-  const FirstOrderModel first(body, *out.nominal,
+  const auto cached = std::make_shared<const LastStateCache>(nominal);
+  const FirstOrderModel first(body, *cached,
                               [&excitation](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) { excitation.evaluate(at, c); },
                               {});
   OdeSystem fsys;
@@ -216,7 +242,7 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
     return A.allFinite();
   };
   fsys.last_error = [] { return std::string("the first-order right-hand side is not finite"); };
-  const auto modal = use_variables(options.first_order_variables, body, fsys, nominal);
+  const auto modal = use_variables(options.first_order_variables, body, fsys, cached);
   const IntegrationResult fr = integrate(fsys, Eigen::VectorXd::Zero(2 * N), outs, cuts, options.integrator);
   out.first_order_rhs_evaluations = fr.rhs_evaluations;
   SimulationResult& tot = out.total;
