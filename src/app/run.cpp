@@ -29,22 +29,21 @@ std::string RunOutput::shown(std::string text) const {
   return text;
 }
 
-void RunOutput::write(const std::string& name, const std::string& content) {
+void RunOutput::stream(const std::string& name, const std::function<void(std::ostream&)>& writer) {
   try {
-    write_file_atomic(dir_ + "/" + name, content);
+    write_file_atomic(dir_ + "/" + name, writer);
   } catch (const IoError& e) {
     throw IoError(shown(e.what()));  // the staging directory is gone once the run ends
   }
   files_.push_back(name);
 }
 
+void RunOutput::write(const std::string& name, const std::string& content) {
+  stream(name, [&content](std::ostream& os) { os << content; });
+}
+
 void RunOutput::csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data) {
-  try {
-    write_file_atomic(dir_ + "/" + name, [&](std::ostream& os) { write_csv(os, header, data); });
-  } catch (const IoError& e) {
-    throw IoError(shown(e.what()));
-  }
-  files_.push_back(name);
+  stream(name, [&](std::ostream& os) { write_csv(os, header, data); });
 }
 
 void RunOutput::plot(const PlotSpec& spec, bool enabled) {
@@ -136,11 +135,15 @@ std::vector<std::string> list_files(const std::string& dir) {
   return names;
 }
 
-/// Removes a flat directory of files (a staging directory); best effort. A symbolic
-/// link in its place is left alone, and so is what it points to.
+/// Removes a staging directory (a flat directory of files); best effort. Anything else by
+/// that name is unlinked: a link goes, never what it points to.
 void remove_flat_dir(const std::string& dir) {
   struct stat st {};
-  if (::lstat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return;
+  if (::lstat(dir.c_str(), &st) != 0) return;
+  if (!S_ISDIR(st.st_mode)) {
+    ::unlink(dir.c_str());
+    return;
+  }
   for (const auto& f : list_files(dir)) std::remove((dir + "/" + f).c_str());
   ::rmdir(dir.c_str());
 }
@@ -210,12 +213,7 @@ void remove_stale_staging(const std::string& dir) {
     if (name.rfind(kStagingPrefix, 0) == 0) stale.push_back(dir + "/" + name);
   }
   ::closedir(d);
-  for (const auto& s : stale) {
-    struct stat st {};
-    if (::lstat(s.c_str(), &st) != 0) continue;
-    if (S_ISDIR(st.st_mode)) remove_flat_dir(s);
-    else ::unlink(s.c_str());  // a file or a link by that name: the link goes, never what it points to
-  }
+  for (const auto& s : stale) remove_flat_dir(s);
 }
 
 /// Moves every file of `staging` into `dir`, replacing the previous run's files; returns

@@ -48,6 +48,8 @@ class RunOutput {
 
  private:
   std::string shown(std::string text) const;
+  /// Writes `name` in dir() through `writer` and counts it among the run's files.
+  void stream(const std::string& name, const std::function<void(std::ostream&)>& writer);
 
   std::string dir_, shown_dir_;
   std::ostream* log_;
