@@ -16,6 +16,7 @@
 namespace freeflex {
 namespace {
 
+using io_detail::plain_name;
 using io_detail::Problems;
 using io_detail::Range;
 using io_detail::Section;
@@ -578,12 +579,10 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
                             "\", must be \"none\" or \"slack-based\" (MC19 is part of HSL, which this Ipopt lacks)");
         continue;
       }
-      // Ipopt opens output_file itself: it goes into the run's directory with the other
-      // results (and is replaced with them), so it must be a plain file name.
+      // freeflex writes Ipopt's log there, into the run's directory with the other results
+      // (and replaced with them), so it must be a plain file name.
       if (key == "output_file") {
-        bool ok = !value.empty() && value.size() <= 64 && value.front() != '.';
-        for (char ch : value) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-' || ch == '.');
-        if (!ok) {
+        if (!plain_name(value, ".")) {
           ip.problem(key, ip.key_path(key) + " = \"" + value +
                               "\", must be a file name of 1 to 64 letters, digits, '_', '-' or '.', not starting with "
                               "'.' (Ipopt writes it into the output directory)");

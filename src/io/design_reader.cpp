@@ -1,8 +1,10 @@
 #include "design_reader.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 
 #include "util/format.hpp"
@@ -181,6 +183,14 @@ std::optional<bool> Section::boolean(const std::string& key, bool required) {
   return *n->value<bool>();
 }
 
+bool plain_name(const std::string& v, const char* also) {
+  if (v.empty() || v.size() > 64 || v.front() == '.') return false;
+  for (char c : v)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && (c == '\0' || !std::strchr(also, c)))
+      return false;
+  return true;
+}
+
 std::optional<std::string> Section::string(const std::string& key, bool required, bool identifier) {
   const toml::node* n = get(key);
   if (!n) {
@@ -193,9 +203,7 @@ std::optional<std::string> Section::string(const std::string& key, bool required
   }
   std::string v = *n->value<std::string>();
   if (identifier) {
-    bool ok = !v.empty() && v.size() <= 64;
-    for (char c : v) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-');
-    if (!ok) {
+    if (!plain_name(v)) {
       problems_.add(line_of(*n), key_path(key) + " = " + show(*n) +
                                      ", must be 1 to 64 letters, digits, '_' or '-' (it names files)");
       return std::nullopt;

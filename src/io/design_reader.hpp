@@ -17,6 +17,9 @@ namespace freeflex::io_detail {
 std::string shortest(double v);
 /// A value as the user wrote it, numbers in shortest round-trip form; cut at 60 characters.
 std::string show(const toml::node& n);
+/// A name that can name a file in the output directory: 1 to 64 letters, digits, '_', '-'
+/// and the characters in `also`, not starting with '.'.
+bool plain_name(const std::string& v, const char* also = "");
 
 class Problems {
  public:
