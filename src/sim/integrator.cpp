@@ -364,7 +364,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   cv.mem = check_alloc(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, cv.ctx), "CVodeCreate");
   check_setup(CVodeSetErrHandlerFn(cv.mem, freeflex_cvode_err, &data), "CVodeSetErrHandlerFn", data);
   check_setup(CVodeInit(cv.mem, freeflex_cvode_rhs, t0, cv.y), "CVodeInit", data);
-  check_setup(CVodeSetUserData(cv.mem, &data), "CVodeSetUserData", data);  // before: CVODES hands it to the weights
+  check_setup(CVodeSetUserData(cv.mem, &data), "CVodeSetUserData", data);  // also what the weights receive
   data.rtol = options.rtol;
   data.atol = change.active() && change.atol_scale.size() == n ? Eigen::VectorXd(options.atol * change.atol_scale)
                                                                 : Eigen::VectorXd::Constant(n, options.atol);

@@ -255,10 +255,11 @@ IpoptRun run_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const T
     run.error = "Ipopt initialization failed";
     return run;
   }
-  const bool capture = o.keep_log || (check_derivatives && o.derivative_test != "none");
-  if (capture) {
-    const int level = check_derivatives && o.derivative_test != "none" ? std::max(o.log_level, int{Ipopt::J_ITERSUMMARY})
-                                                                        : std::clamp(o.log_level, 0, int{Ipopt::J_ALL});
+  const bool derivative_check = check_derivatives && o.derivative_test != "none";
+  if (o.keep_log || derivative_check) {
+    // derivative_errors() reads the checker's verdict from this log, at print level 5 or more
+    const int level = derivative_check ? std::max(o.log_level, int{Ipopt::J_ITERSUMMARY})
+                                       : std::clamp(o.log_level, 0, int{Ipopt::J_ALL});
     Ipopt::SmartPtr<Ipopt::Journal> j = new StringJournal(static_cast<Ipopt::EJournalLevel>(level), &run.log);
     app->Jnlst()->AddJournal(j);
   }

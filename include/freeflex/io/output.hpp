@@ -1,11 +1,11 @@
 #pragma once
 // Result files: atomic writes (a file appears whole or not at all), CSV tables and a
 // small JSON value type for summary.json.
+#include <functional>
 #include <map>
 #include <memory>
-#include <stdexcept>
-#include <functional>
 #include <ostream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <variant>
