@@ -209,16 +209,17 @@ TEST_CASE("controller keys load, bad weights, horizons and names are reported", 
   CHECK(problems_of(two + "input_weights = [1e-6, 1e6]\n").empty());
   CHECK_THAT(problems_of(two + "input_weights = [1e-7, 1e6]\n"),
              Contains("line 27: controller.input_weights spans 1e-07 to 1e+06, more than a factor 1e+12"));
-  // A maneuver of fixed duration longer than the horizon is refused before anything runs.
-  const std::string man = kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
-                          "limit = 1.0\n[maneuver]\nactuators = [\"hub\"]\nduration_s = 3.0\n[maneuver.final]\n"
-                          "theta_deg = 90.0\n[controller]\nactuators = [\"hub\"]\n";  // [controller] line 15
+  // A maneuver longer than the horizon is refused before anything runs.
+  auto maneuver_then_controller = [&](const std::string& duration_keys) {
+    return kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 1.0\n" +
+           "[maneuver]\nactuators = [\"hub\"]\n" + duration_keys + "[maneuver.final]\ntheta_deg = 90.0\n" +
+           "[controller]\nactuators = [\"hub\"]\n";
+  };
+  const std::string man = maneuver_then_controller("duration_s = 3.0\n");  // [controller] line 15
   CHECK(problems_of(man + "horizon_s = 3.0\n").empty());
   CHECK_THAT(problems_of(man + "horizon_s = 2.5\n"),
              Contains("line 17: controller.horizon_s = 2.5, shorter than the maneuver (maneuver.duration_s = 3)"));
-  const std::string free = kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
-                           "limit = 1.0\n[maneuver]\nactuators = [\"hub\"]\nfree_duration = true\n"
-                           "duration_min_s = 2.0\n[maneuver.final]\ntheta_deg = 90.0\n[controller]\nactuators = [\"hub\"]\n";
+  const std::string free = maneuver_then_controller("free_duration = true\nduration_min_s = 2.0\n");  // line 16
   CHECK(problems_of(free + "horizon_s = 3.0\n").empty());  // the optimizer may still choose longer: checked then
   CHECK_THAT(problems_of(free + "horizon_s = 1.5\n"),
              Contains("line 18: controller.horizon_s = 1.5, shorter than the maneuver (maneuver.duration_min_s = 2)"));
