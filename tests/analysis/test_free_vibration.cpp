@@ -22,6 +22,7 @@ Eigen::VectorXd paper_beam_lambdas(int noa) {
 TEST_CASE("free-free roots solve cos(l) cosh(l) = 1", "[analysis]") {
   const double ref[6] = {4.730040744862704, 7.853204624095838, 10.99560783800167,
                          14.13716549125746, 17.27875965739948, 20.42035224562606};
+  // the root finder converges to round-off; the reference has 16 digits
   for (int k = 1; k <= 6; ++k) CHECK(free_free_root(k) == Approx(ref[k - 1]).epsilon(1e-14));
 }
 
@@ -79,7 +80,8 @@ TEST_CASE("mode shapes: NOA = 20 mode 4 matches the exact free-free shape", "[an
   w /= w.cwiseAbs().maxCoeff();
   we /= we.cwiseAbs().maxCoeff();
   if (w.dot(we) < 0) w = -w;
-  // Ritz mode shapes converge more slowly than frequencies (first vs second order):
-  // at NOA 20 the shape error is ~1e-3 of its peak
-  CHECK((w - we).cwiseAbs().maxCoeff() < 5e-3);
+  // Ritz mode shapes converge more slowly than frequencies (first vs second order): at
+  // NOA 20 the shape error is 6.3e-5 of its peak (measured); 2e-4 still catches a basis
+  // that converges an order of magnitude worse
+  CHECK((w - we).cwiseAbs().maxCoeff() < 2e-4);
 }

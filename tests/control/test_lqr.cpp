@@ -88,7 +88,7 @@ TEST_CASE("Modal Lyapunov solver: agrees with the Schur solver, residual at roun
     Eigen::VectorXcd e1 = schur.eigenvalues(), e2 = modal.eigenvalues();
     std::sort(e1.data(), e1.data() + n, [](auto a, auto b) { return a.real() < b.real() || (a.real() == b.real() && a.imag() < b.imag()); });
     std::sort(e2.data(), e2.data() + n, [](auto a, auto b) { return a.real() < b.real() || (a.real() == b.real() && a.imag() < b.imag()); });
-    CHECK((e1 - e2).norm() < 1e-12 * A.norm());  // the same Schur blocks
+    CHECK((e1 - e2).norm() < 1e-12 * A.norm());  // the same Schur blocks, read two ways: round-off relative to ‖A‖
     for (double sigma : {-3.0, 0.0, 7.5}) {
       const Eigen::MatrixXd As = A + sigma * Eigen::MatrixXd::Identity(n, n);
       Eigen::MatrixXd X1, X2, Y1, Y2;
@@ -190,10 +190,11 @@ TEST_CASE("CARE: double integrator closed form P = [[sqrt3, 1], [1, sqrt3]]", "[
   P << std::sqrt(3.0), 1.0, 1.0, std::sqrt(3.0);
   INFO("P = \n" << r.P << "\nresidual " << r.residual);
   CHECK((r.P - P).cwiseAbs().maxCoeff() < 1e-13);  // O(1) entries: round-off only
-  CHECK(r.K(0, 0) == Approx(1.0).epsilon(1e-13));
+  CHECK(r.K(0, 0) == Approx(1.0).epsilon(1e-13));  // K = R⁻¹ Bᵀ P: the same round-off as P
   CHECK(r.K(0, 1) == Approx(std::sqrt(3.0)).epsilon(1e-13));
   CHECK(r.residual < 1e-14);  // Newton polish drives it to round-off
   // closed loop s^2 + sqrt3 s + 1: both roots at -sqrt3/2 +- i/2
+  // a simple pair of roots of an O(1) matrix: round-off, with room for the eigensolver's κ
   for (int i = 0; i < 2; ++i) CHECK(r.closed_loop_eigenvalues(i).real() == Approx(-std::sqrt(3.0) / 2).epsilon(1e-12));
 }
 
@@ -227,6 +228,8 @@ TEST_CASE("CARE: random stabilizable systems, relative residual", "[control]") {
     CHECK(r.residual < 1e-10);
     CHECK(r.residual_normwise < 1e-12);  // backward stable: measured <= 1e-13, i.e. ~20 n ε
     CHECK(r.closed_loop_eigenvalues.real().maxCoeff() < 0.0);  // stabilizing
+    // positive semidefinite up to round-off of the eigensolver and of P (n ε ‖P‖ ~ 1e-14 ‖P‖), with
+    // room for P's own residual (1e-10 above)
     CHECK(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(r.P).eigenvalues().minCoeff() > -1e-10 * r.P.norm());
   }
 }
@@ -245,7 +248,7 @@ TEST_CASE("CARE: stabilizability and detectability are diagnosed", "[control]") 
     const CareResult rr = solve_care(A, B, Q, R, o);
     REQUIRE(rr.ok());
     CHECK(rr.P(0, 0) == 0.0);                                   // the mode is left alone
-    CHECK(rr.P(1, 1) == Approx(-1.0 + std::sqrt(2.0)).epsilon(1e-12));  // scalar CARE -2p - p^2 + 1 = 0
+    CHECK(rr.P(1, 1) == Approx(-1.0 + std::sqrt(2.0)).epsilon(1e-12));  // scalar CARE -2p - p^2 + 1 = 0; round-off
   }
   SECTION("undamped oscillator with Q = 0: eigenvalues on the imaginary axis") {
     Eigen::MatrixXd A(2, 2), B(2, 1), Q = Eigen::MatrixXd::Zero(2, 2), R = Eigen::MatrixXd::Identity(1, 1);
@@ -408,7 +411,7 @@ TEST_CASE("TV-LQR on the beam at rest converges to the steady-state LQR gain", "
   CHECK(err_end > 0.5);  // Qf = 0: the gain starts far away (the test could fail)
   // Both Newton-solve forms run here: near tf, P ≈ 0 and A_cl = A has the free beam's
   // three rigid double integrators at 0 (no well-conditioned eigenbasis: Schur fallback,
-  // measured 5 and 9 setups); once the loop closes only the axial one remains, a
+  // measured 3 of 167 and 3 of 481 setups); once the loop closes only the axial one remains, a
   // near-defective pair the block-diagonal form keeps as one block.
   CHECK(law.modal_setups > 0.9 * law.preconditioner_setups);
   CHECK(law.modal_setups < law.preconditioner_setups);

@@ -49,15 +49,16 @@ TEST_CASE("switch-time design: k = 1, 2 modes at rest in the first-order model",
     CHECK(r.duration_s > r.rigid_duration_s);
     CHECK(r.residual_ratio < 1e-9);  // the brief's acceptance
     CHECK(r.final_angle_rad == Approx(3.0).epsilon(1e-9));  // rigid rest-to-rest, scaled constraint 1e-7 met to ~1e-12
-    CHECK(std::abs(r.final_rate_rad_s) < 1e-9);
+    CHECK(std::abs(r.final_rate_rad_s) < 1e-12);  // the rest constraint, solved to round-off (measured 9e-16)
     // An independent run at tighter tolerance agrees.
     const BangBangResidual check = bang_bang_residual(body, 0, 1.0, r.switch_times, r.duration_s, k, 1e-12, 1e-15);
     REQUIRE(check.ok);
     const double ratio = check.energy_J.sum() / check.rigid_kinetic_peak_J;
     INFO("re-simulated ratio " << ratio);
-    CHECK(ratio < 1e-9);
-    // The closed form ignores θ0'² softening: its design is off in the first-order model.
-    CHECK(r.closed_form_residual_ratio > 1e2 * r.residual_ratio);
+    CHECK(ratio < 1e-9);  // the brief's acceptance, on the independent run
+    // The closed form ignores θ0'² softening: its design leaves visible ringing in the
+    // first-order model (measured 9.3e-4 at k = 1, 2.7e-2 at k = 2).
+    CHECK(r.closed_form_residual_ratio > 1e-4);
   }
 }
 
@@ -70,10 +71,10 @@ TEST_CASE("ZV and ZVD shapers cancel a single mode", "[control]") {
       sum += s.amplitudes[i];
       z += s.amplitudes[i] * std::exp(zeta * w * s.times[i]) * std::polar(1.0, wd * s.times[i]);
     }
-    CHECK(sum == Approx(1.0).epsilon(1e-15));
+    CHECK(sum == Approx(1.0).epsilon(1e-15));  // amplitudes sum to one: a few roundings
     CHECK(std::abs(z) < 1e-14);  // residual vibration of the impulse sequence, exact in closed form
   }
-  CHECK(zv_shaper(w).times[1] == Approx(M_PI / w).epsilon(1e-15));
+  CHECK(zv_shaper(w).times[1] == Approx(M_PI / w).epsilon(1e-15));  // half the damped period: one rounding
 }
 
 TEST_CASE("switch-time design: SLSQP refinement reaches Newton's design (k = 1)", "[control]") {
@@ -90,7 +91,9 @@ TEST_CASE("switch-time design: SLSQP refinement reaches Newton's design (k = 1)"
   REQUIRE(slsqp.ok());
   std::cout << "[control] k = 1 by SLSQP: T = " << slsqp.duration_s << " s, residual ratio " << slsqp.residual_ratio
             << ", " << slsqp.simulations << " simulations\n";
-  CHECK(slsqp.residual_ratio < 1e-9);
+  CHECK(slsqp.residual_ratio < 1e-9);  // the brief's acceptance
   CHECK(slsqp.duration_s == Approx(newton.duration_s).epsilon(1e-7));  // one root, both to constraint tolerance
+  // the same root; SLSQP stops at its optimality tolerance, which leaves single switch times
+  // freer than their sum T (a flat direction of the residual near its zero)
   for (int i = 0; i < 3; ++i) CHECK(slsqp.switch_times[i] == Approx(newton.switch_times[i]).epsilon(1e-6));
 }

@@ -116,7 +116,7 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
   CHECK(d.damping_ratios == std::vector<double>{0.01, 0.02});
   REQUIRE(d.simulation);
   CHECK(d.simulation->options.integrator.rtol == 1e-9);
-  CHECK(d.simulation->options.output_step_s == Approx(2.0 / 600));
+  CHECK(d.simulation->options.output_step_s == Approx(2.0 / 600).epsilon(1e-15));  // duration / count: a rounding or two
   // defaults: modal variables for the first-order model, physical for the full one
   CHECK(d.simulation->options.first_order_variables == SimulationOptions::Variables::Modal);
   CHECK(d.simulation->options.full_variables == SimulationOptions::Variables::Physical);
@@ -171,7 +171,7 @@ TEST_CASE("maneuver keys load, unknown actuator names and bad weights are report
   CHECK(p.free_time);
   CHECK(p.w_time == 1.0);
   CHECK(p.t_max_s == 4.0);
-  CHECK(p.x_final(2) == Approx(M_PI / 2));
+  CHECK(p.x_final(2) == Approx(M_PI / 2).epsilon(1e-15));  // degrees to radians: a rounding or two
   CHECK(d.maneuver->options.transcription == Transcription::Trapezoidal);
   CHECK(d.maneuver->options.ipopt_options.size() == 2);
   CHECK_THAT(problems_of(kPaperBeam + act + "[maneuver]\nactuators = [\"tip\"]\nduration_s = 1.0\n"),

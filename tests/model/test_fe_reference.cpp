@@ -60,6 +60,7 @@ std::vector<double> key_points(const BeamProperties& p, double s_o) {
   for (const auto& seg : p.segments) k.push_back(s += seg.length_m);
   for (const auto& pm : p.point_masses) k.push_back(pm.position_m);
   std::sort(k.begin(), k.end());
+  // one position reached by two sums of lengths: equal up to their round-off
   k.erase(std::unique(k.begin(), k.end(), [&](double a, double b) { return std::abs(a - b) < 1e-12 * L; }),
           k.end());
   return k;
@@ -121,7 +122,7 @@ RefIntegrals reference_integrals(const BeamProperties& p, double s_o, const Admi
   std::sort(cuts.begin(), cuts.end());
   for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
     const double a = cuts[i], b = cuts[i + 1];
-    if (!(b - a > 1e-12 * L)) continue;
+    if (!(b - a > 1e-12 * L)) continue;  // a cut repeated up to round-off of sums of lengths: no interval
     const BeamSegment& seg = segment_containing(p, 0.5 * (a + b));
     const int panels = static_cast<int>(std::ceil((b - a) * kmax));
     const double h = (b - a) / panels;

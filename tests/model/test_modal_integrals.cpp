@@ -10,7 +10,7 @@ using namespace freeflex;
 TEST_CASE("uniform beam: m, S_o, I_o exact, parity of Phi_bar and Phi_tilde", "[model]") {
   const double L = 1.7, mass = 2.3, EI = 4.1;
   const Beam beam(BeamProperties::uniform(L, mass, EI));
-  REQUIRE(beam.reference_s() == Approx(L / 2).epsilon(1e-15));
+  REQUIRE(beam.reference_s() == Approx(L / 2).epsilon(1e-15));  // the centre of a uniform beam: one rounding
   const ModalIntegrals mi = modal_integrals(beam, make_basis(beam, 12));
   // rigid integrals are closed forms: round-off only
   CHECK(std::abs(mi.m - mass) <= 1e-14 * mass);
@@ -34,6 +34,7 @@ TEST_CASE("uniform beam: m, S_o, I_o exact, parity of Phi_bar and Phi_tilde", "[
   for (int k = 1; k <= 6; ++k) {
     const CantileverConstants c(k);
     const double a = L / 2, mbar = mass / L;
+    // Gauss quadrature of a smooth integrand, converged: round-off of ~1e3 terms
     CHECK(mi.Phi_bar(2 * (k - 1)) == Approx(2 * mbar * a * 2 * c.sigma / c.lambda).epsilon(1e-12));
   }
 }
@@ -41,9 +42,10 @@ TEST_CASE("uniform beam: m, S_o, I_o exact, parity of Phi_bar and Phi_tilde", "[
 TEST_CASE("NOA = 60: M symmetric positive definite and well conditioned", "[model]") {
   const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
   const ModalIntegrals mi = modal_integrals(beam, make_basis(beam, 60));
-  CHECK((mi.M - mi.M.transpose()).cwiseAbs().maxCoeff() == 0.0);  // symmetrized by construction
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(mi.M);
   INFO("eigenvalues of M in [" << es.eigenvalues().minCoeff() << ", " << es.eigenvalues().maxCoeff() << "]");
-  CHECK(es.eigenvalues().minCoeff() > 0.999);  // M = m I up to quadrature round-off
-  CHECK(es.eigenvalues().maxCoeff() < 1.001);
+  // M = m I up to quadrature round-off (measured 1e-14): the scaled cantilever functions keep
+  // their digits at lambda ~ 94, where the cosh - sinh form would lose all of them (e^94 ~ 1e40)
+  CHECK(es.eigenvalues().minCoeff() > 1.0 - 1e-12);
+  CHECK(es.eigenvalues().maxCoeff() < 1.0 + 1e-12);
 }

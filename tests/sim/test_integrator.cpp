@@ -149,11 +149,12 @@ TEST_CASE("roundoff-sized pieces and outputs next to a breakpoint do not fail", 
   INFO(r.message);
   REQUIRE(r.ok);
   REQUIRE(r.t.size() == 5);
-  // x = t - 1 is reproduced to roundoff; the skipped spans change it by an ulp at most
+  // x = t - 1 is reproduced to round-off: a few ulp of O(1) values (measured 3.5 ulp at most);
+  // the skipped spans change it by an ulp at most
   CHECK(std::abs(r.x(1, 0)) < 1e-15);
-  CHECK(std::abs(r.x(2, 0) - 0.5) < 1e-12);
-  CHECK(std::abs(r.x(3, 0) - 0.5) < 1e-12);
-  CHECK(std::abs(r.x(4, 0) - 1.0) < 1e-12);
+  CHECK(std::abs(r.x(2, 0) - 0.5) < 1e-14);
+  CHECK(std::abs(r.x(3, 0) - 0.5) < 1e-14);
+  CHECK(std::abs(r.x(4, 0) - 1.0) < 1e-14);
 }
 
 TEST_CASE("analytic Jacobian and difference quotients agree on a stiff system", "[sim]") {
@@ -229,7 +230,6 @@ TEST_CASE("a failing right-hand side is reported with the time reached", "[sim]"
   CHECK_THAT(r.message, Contains("right-hand side failed"));
   CHECK(r.failure_time <= 0.3);   // the last successful step never passed the failing time
   CHECK(r.failure_time > 0.2);    // the output at 0.2 was reached
-  CHECK(r.failure_time < 0.31);
   REQUIRE(r.t.size() == 3);  // 0, 0.1, 0.2 reached; 0.3 is not (the step to it looks past it)
   REQUIRE(r.x.rows() == 3);
   CHECK(r.t(2) == 0.2);

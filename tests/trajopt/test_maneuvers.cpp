@@ -4,10 +4,12 @@
 // refinement and warm starts.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
+#include "freeflex/dynamics/zero_order.hpp"
 #include "freeflex/trajopt/replay.hpp"
 #include "freeflex/trajopt/solve.hpp"
 
@@ -165,9 +167,11 @@ TEST_CASE("two-thruster slew at minimum energy, replayed open loop", "[trajopt]"
   WARN("slew, HS N = 100: J = " << r.objective << " N^2 s, " << r.iterations << " iterations, "
                                 << r.solve_time_s << " s; open-loop replay misses the target by " << pos_err
                                 << " m, " << ang_err << " rad, " << rate_err << " m/s or rad/s");
-  CHECK(pos_err < 1e-4);   // required accuracy; HS is O(h⁴) (observed ~1e-7)
+  CHECK(pos_err < 1e-4);   // the accuracy the maneuver issue requires of an HS N = 100 solution
   CHECK(ang_err < 1e-4);   // same
   CHECK(rate_err < 1e-4);  // same
+  // HS is O(h⁴): observed 3e-8, 3e-9 and 1e-8 at N = 100; 1e-6 catches an order lost
+  CHECK(std::max({pos_err, ang_err, rate_err}) < 1e-6);
   // The replay reports its start at t = 0 and its end at T.
   IntegratorOptions io;
   const IntegrationResult ir = replay_open_loop(body, p, r, io);
@@ -177,7 +181,8 @@ TEST_CASE("two-thruster slew at minimum energy, replayed open loop", "[trajopt]"
   CHECK(ir.steps > 0);
   // A result without a trajectory cannot be replayed: a clear error, not a crash.
   CHECK_THROWS_WITH(replay_open_loop(body, p, TrajoptResult{}, io), Catch::Contains("no trajectory"));
-  // The trajectory says the same as the replay: its error estimate is small.
+  // The trajectory says the same as the replay: its error estimate is small (observed
+  // 2.3e-7, the size of the replay's miss; 1e-5 allows that a factor 40, an order of h⁴ lost).
   CHECK(r.max_error_estimate < 1e-5);
 
   // The compressed form is the same discretization: the same optimum.
@@ -222,6 +227,7 @@ TEST_CASE("two-thruster slew at minimum time", "[trajopt]") {
   CHECK(r.duration_s > p.t_min_s + 0.1);  // an interior optimum, not the bound
   // Bang-bang thrust: most knots sit on a bound.
   int on_bound = 0;
+  // an interior-point optimum stops ~tol (1e-8) inside an active bound; 1e-4 tells active from interior
   for (Eigen::Index i = 0; i < r.u.size(); ++i) on_bound += std::abs(std::abs(r.u(i)) - 1.0) < 1e-4;
   CHECK(on_bound > r.u.size() / 2);
   const Eigen::VectorXd xT = replay(body, p, r);
@@ -334,10 +340,15 @@ TEST_CASE("the collocation trajectory is a consistent RigidTrajectory", "[trajop
         // the quadratic through knot, midpoint, knot: exact at s = 1/2 up to round-off
         CHECK((traj.control_at(r.t_mid(k)) - r.u_mid.row(k).transpose()).cwiseAbs().maxCoeff() < 1e-14);
       }
+    const ZeroOrderModel zero(body);  // the simulation's rigid model, another code path than dyn
     for (double t : {0.01, 1.234, 2.99}) {  // acceleration = the model at the interpolated point
       const RigidState s = traj.at(Instant::at(t));
-      const Eigen::Matrix<double, 6, 1> f = dyn.eval(traj.state_at(t), traj.control_at(t));
-      CHECK((s.acc - f.tail<3>()).cwiseAbs().maxCoeff() == 0.0);
+      Eigen::VectorXd commands = Eigen::VectorXd::Zero(body.elements().size());
+      const Eigen::VectorXd u = traj.control_at(t);
+      for (int k = 0; k < dyn.nu(); ++k) commands(dyn.actuators()[k]) = u(k);
+      const Eigen::Vector3d acc = zero.acceleration(traj.state_at(t), commands);
+      // two solution paths of the same 3 x 3 system (see test_rigid_dynamics): round-off of O(1) values
+      CHECK((s.acc - acc).cwiseAbs().maxCoeff() < 1e-12);
     }
     CHECK(traj.control_at(-0.1).isZero());
     CHECK(traj.control_at(3.1).isZero());

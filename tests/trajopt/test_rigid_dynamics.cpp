@@ -87,7 +87,7 @@ TEST_CASE("rigid dynamics Jacobian and Hessian contraction match central differe
     INFO("trial " << trial);
     CHECK((J - Jfd).cwiseAbs().maxCoeff() < 1e-8);  // see h above, entries O(1..10)
     CHECK((H - Hfd).cwiseAbs().maxCoeff() < 1e-8);  // same differences of the analytic Jacobian
-    CHECK((H - H.transpose()).cwiseAbs().maxCoeff() == 0.0);
+    CHECK((H - H.transpose()).cwiseAbs().maxCoeff() == 0.0);  // the documented contract: every entry written, symmetric
 
     // Entries outside the declared sparsity patterns are exactly zero.
     Eigen::MatrixXd Jmask = J, Hmask = H;
