@@ -182,7 +182,7 @@ TEST_CASE("two-thruster slew at minimum energy, replayed open loop", "[trajopt]"
   // A result without a trajectory cannot be replayed: a clear error, not a crash.
   CHECK_THROWS_WITH(replay_open_loop(body, p, TrajoptResult{}, io), Catch::Contains("no trajectory"));
   // The trajectory says the same as the replay: its error estimate is small (observed
-  // 2.3e-7, the size of the replay's miss; 1e-5 allows that a factor 40, an order of h⁴ lost).
+  // 2.3e-7, the size of the replay's miss; 1e-5 is 40 times that, so a lost order shows).
   CHECK(r.max_error_estimate < 1e-5);
 
   // The compressed form is the same discretization: the same optimum.
