@@ -229,9 +229,10 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
   d.free_vibration = fv;
 }
 
-std::optional<ForceElement> read_element(Section& s, double length, bool& ok) {
+std::optional<ForceElement> read_element(Section& s, double length, bool& ok, std::string& name_read) {
   ForceElement e;
   auto name = s.string("name", true, true);
+  if (name) name_read = *name;
   auto type = s.choice("type", {"force", "thruster", "torque"}, true);
   const Range on_beam = length > 0 ? Range::closed(0.0, length) : Range::nonnegative();
   auto pos = s.number("position_m", on_beam, true);
@@ -314,35 +315,37 @@ double beam_length(const Design& d) {
   return L;
 }
 
-void read_loads_and_actuators(Section& root, Design& d) {
+/// Returns the names of the actuators rejected for a bad field (already reported), so that
+/// the sections naming them do not report them again as unknown.
+std::vector<std::string> read_loads_and_actuators(Section& root, Design& d) {
   const double L = beam_length(d);
-  std::vector<std::pair<std::string, Section*>> names;
-  auto loads = root.table_array("load");
-  auto acts = root.table_array("actuator");
-  for (auto& s : loads) {
+  std::vector<std::string> seen, rejected;
+  auto check_name = [&](const std::string& name, Section& s) {
+    if (name.empty()) return;  // missing or not a string: reported by read_element
+    if (std::find(seen.begin(), seen.end(), name) != seen.end())
+      s.problem("name", s.key_path("name") + " = \"" + name + "\" is used twice; load and actuator names must be unique");
+    seen.push_back(name);
+  };
+  for (auto& s : root.table_array("load")) {
     bool ok = true;
-    auto e = read_element(s, L, ok);
+    std::string name;
+    auto e = read_element(s, L, ok, name);
     auto prof = read_profile(s);
     s.finish();
+    check_name(name, s);
     if (e && ok && prof) d.loads.push_back({*e, *prof});
   }
-  for (auto& s : acts) {
+  for (auto& s : root.table_array("actuator")) {
     bool ok = true;
-    auto e = read_element(s, L, ok);
-    const double limit = s.number("limit", kCommand, false).value_or(0.0);
+    std::string name;
+    auto e = read_element(s, L, ok, name);
+    const auto limit = s.number("limit", kCommand, false);
     s.finish();
-    if (e && ok) d.actuators.push_back({*e, limit});
+    check_name(name, s);
+    if (e && ok && (limit || !s.has("limit"))) d.actuators.push_back({*e, limit.value_or(0.0)});
+    else if (!name.empty()) rejected.push_back(name);
   }
-  std::vector<std::string> seen;
-  auto check_name = [&](const ForceElement& e, Section& s) {
-    if (std::find(seen.begin(), seen.end(), e.name) != seen.end())
-      s.problem("name", s.key_path("name") + " = \"" + e.name + "\" is used twice; load and actuator names must be unique");
-    seen.push_back(e.name);
-  };
-  for (std::size_t i = 0, k = 0; i < loads.size() && k < d.loads.size(); ++i)
-    if (loads[i].has("name")) check_name(d.loads[k++].element, loads[i]);
-  for (std::size_t i = 0, k = 0; i < acts.size() && k < d.actuators.size(); ++i)
-    if (acts[i].has("name")) check_name(d.actuators[k++].element, acts[i]);
+  return rejected;
 }
 
 void read_damping(Section& root, Design& d) {
@@ -387,7 +390,8 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
   auto traj = s.number("trajectory_step_s", Range::positive(), false);
   o.trajectory_step_s = traj.value_or(o.trajectory_step_s);
   o.integrator.rtol = s.number("rtol", Range{0.0, 1.0, true, true}, false).value_or(1e-8);
-  o.integrator.atol = s.number("atol", Range::positive(), false).value_or(1e-10);
+  // an absolute error of 1 (m, rad, modal amplitude) or more would switch the error control off
+  o.integrator.atol = s.number("atol", Range{0.0, 1.0, true, true}, false).value_or(1e-10);
   o.integrator.max_step = s.number("max_step_s", Range::nonnegative(), false).value_or(0.0);
   const std::string method = s.choice("method", {"bdf", "adams"}, false).value_or("adams");
   o.integrator.method = method == "adams" ? IntegratorOptions::Method::Adams : IntegratorOptions::Method::Bdf;
@@ -435,8 +439,9 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
 }
 
 /// Resolves [[actuator]] names to element indices (loads come first in force_elements()).
+/// Names in `rejected` (actuators with a bad field, already reported) are left out silently.
 std::vector<int> actuator_indices(Section& s, const std::string& key, const std::vector<std::string>& names,
-                                  const Design& d) {
+                                  const Design& d, const std::vector<std::string>& rejected) {
   std::vector<int> idx;
   for (std::size_t k = 0; k < names.size(); ++k) {
     const std::string& name = names[k];
@@ -449,6 +454,7 @@ std::vector<int> actuator_indices(Section& s, const std::string& key, const std:
     int found = -1;
     for (std::size_t i = 0; i < d.actuators.size(); ++i)
       if (d.actuators[i].element.name == name) found = static_cast<int>(i);
+    if (found < 0 && std::find(rejected.begin(), rejected.end(), name) != rejected.end()) continue;
     if (found < 0) {
       std::string known;
       for (const auto& a : d.actuators) known += (known.empty() ? "'" : ", '") + a.element.name + "'";
@@ -488,7 +494,7 @@ Eigen::Matrix<double, 6, 1> read_state(Section& m, const std::string& key) {
   return x;
 }
 
-void read_maneuver(Section& root, Design& d, Outputs& outputs) {
+void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected) {
   Section m = root.table("maneuver");
   if (!m.present()) return;
   ManeuverStudy st;
@@ -497,7 +503,7 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
   // actuators by name, with their limits as bounds
   bool names_ok = false;  // else the per-actuator sizes below are not checked
   if (auto list = m.string_array("actuators", true)) {
-    p.actuators = actuator_indices(m, "actuators", *list, d);
+    p.actuators = actuator_indices(m, "actuators", *list, d, rejected);
     names_ok = p.actuators.size() == list->size();
     std::vector<double> lo, hi;
     for (int e : p.actuators) {
@@ -518,10 +524,15 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
   p.free_time = m.boolean("free_duration", false).value_or(time_objective);
   if (objective == "time" && !p.free_time)
     m.problem("free_duration", m.key_path("free_duration") + " = false, but objective \"time\" needs a free duration");
-  auto dur = m.number("duration_s", kTime, !p.free_time);
-  p.t_min_s = m.number("duration_min_s", kTime, false).value_or(0.1);
-  p.t_max_s = m.number("duration_max_s", kTime, false).value_or(10.0);
-  p.duration_s = dur.value_or(0.5 * (p.t_min_s + p.t_max_s));
+  // A value given but rejected (its problem is reported) reads as NaN, so that the checks
+  // of other sections against it stay silent instead of quoting a default the file lacks.
+  auto duration = [&](const char* key, bool required, double fallback) {
+    const auto v = m.number(key, kTime, required);
+    return v ? *v : (m.has(key) || required ? std::numeric_limits<double>::quiet_NaN() : fallback);
+  };
+  p.t_min_s = duration("duration_min_s", false, 0.1);
+  p.t_max_s = duration("duration_max_s", false, 10.0);
+  p.duration_s = duration("duration_s", !p.free_time, 0.5 * (p.t_min_s + p.t_max_s));
   if (p.free_time && p.t_min_s > p.t_max_s)
     m.problem("duration_min_s", m.key_path("duration_min_s") + " must not exceed duration_max_s");
   p.w_energy = objective == "energy" ? 1.0 : 0.0;
@@ -600,14 +611,14 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs) {
   d.maneuver = st;
 }
 
-void read_controller(Section& root, Design& d, Outputs& outputs) {
+void read_controller(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected) {
   Section c = root.table("controller");
   if (!c.present()) return;
   ControllerStudy st;
   c.choice("type", {"tvlqr"}, false);
   bool names_ok = false;  // else the per-actuator sizes below are not checked
   if (auto names = c.string_array("actuators", true)) {
-    st.actuators = actuator_indices(c, "actuators", *names, d);
+    st.actuators = actuator_indices(c, "actuators", *names, d, rejected);
     names_ok = st.actuators.size() == names->size();
     if (names_ok) st.actuator_names = *names;
   }
@@ -737,7 +748,8 @@ void read_controller(Section& root, Design& d, Outputs& outputs) {
     for (int a : d.maneuver->problem.actuators)
       if (std::find(st.actuators.begin(), st.actuators.end(), a) == st.actuators.end())
         c.problem("actuators", c.key_path("actuators") + " must include every maneuver actuator (the feedback adds "
-                                                         "to their commands)");
+                                                         "to their commands); \"" +
+                                   d.actuators[a - d.loads.size()].element.name + "\" is missing");
   }
   d.controller = st;
 }
@@ -838,13 +850,14 @@ void check_bang_bang_body(Section& b, const Design& d) {
   }
 }
 
-void read_bang_bang(Section& root, Design& d, Outputs& outputs, const Problems& problems) {
+void read_bang_bang(Section& root, Design& d, Outputs& outputs, const Problems& problems,
+                    const std::vector<std::string>& rejected) {
   Section b = root.table("bang_bang");
   if (!b.present()) return;
   BangBangStudy st;
   bool actuator_ok = false;
   if (auto name = b.string("actuator", true)) {
-    const auto idx = actuator_indices(b, "actuator", {*name}, d);
+    const auto idx = actuator_indices(b, "actuator", {*name}, d, rejected);
     if (!idx.empty()) {
       st.actuator = idx[0];
       st.actuator_name = *name;
@@ -933,12 +946,12 @@ Design parse_design(const std::string& text, const std::string& source) {
   Outputs outputs;
   outputs.fixed("every run", "summary.json");
   read_free_vibration(root, d, outputs);
-  read_loads_and_actuators(root, d);
+  const std::vector<std::string> rejected_actuators = read_loads_and_actuators(root, d);
   read_damping(root, d);
   read_simulation(root, d, outputs);
-  read_maneuver(root, d, outputs);
-  read_controller(root, d, outputs);
-  read_bang_bang(root, d, outputs, problems);
+  read_maneuver(root, d, outputs, rejected_actuators);
+  read_controller(root, d, outputs, rejected_actuators);
+  read_bang_bang(root, d, outputs, problems, rejected_actuators);
   root.finish();
   outputs.check(problems);
   if (problems.empty()) {

@@ -274,10 +274,10 @@ std::optional<std::vector<double>> Section::number_array(const std::string& key,
                                      (e.is_array() ? " (not of arrays)" : ""));
       return std::nullopt;
     }
-    const bool ok = std::isfinite(*e.value<double>()) && range.contains(*e.value<double>());
-    if (!ok) {
-      problems_.add(line_of(*n),
-                    key_path(key) + " contains " + show(e) + ", each entry " + range.describe(*e.value<double>()));
+    const double v = *e.value<double>();
+    if (!std::isfinite(v) || !range.contains(v)) {
+      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", each entry " +
+                                     (std::isfinite(v) ? range.describe(v) : "must be a finite number"));
       return std::nullopt;
     }
     out.push_back(*e.value<double>());

@@ -123,7 +123,7 @@ TEST_CASE("a bad simulation design exits 2 naming the key and line", "[cli]") {
   CHECK(r.exit_code == 2);
   CHECK_THAT(r.output, Contains("line 8: load[1].position_m = 2.0, must be in [0, 1]"));
   CHECK_THAT(r.output, Contains("line 11: load[1].profile.times_s must be strictly increasing"));
-  CHECK_THAT(r.output, Contains("line 15: simulation.atol = -1, must be > 0"));
+  CHECK_THAT(r.output, Contains("line 15: simulation.atol = -1, must be in (0, 1)"));
   CHECK(!exists(out));
 }
 

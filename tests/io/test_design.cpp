@@ -142,7 +142,10 @@ TEST_CASE("bad loads and tolerances name key and line", "[io]") {
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\nrtol = -1e-8\n"),
              Contains("line 16: simulation.rtol = -1e-08, must be in (0, 1)"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\natol = -1e-10\n"),
-             Contains("line 16: simulation.atol = -1e-10, must be > 0"));
+             Contains("line 16: simulation.atol = -1e-10, must be in (0, 1)"));
+  // an absolute tolerance of 1 or more turns the error control off: a wrong result, not an error
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\natol = 99999999999\n"),
+             Contains("line 16: simulation.atol = 99999999999, must be in (0, 1)"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\nfull_model_variables = \"eigen\"\n"),
              Contains("line 16: simulation.full_model_variables"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 0\n"),
@@ -223,6 +226,29 @@ TEST_CASE("controller keys load, bad weights, horizons and names are reported", 
   CHECK(problems_of(free + "horizon_s = 3.0\n").empty());  // the optimizer may still choose longer: checked then
   CHECK_THAT(problems_of(free + "horizon_s = 1.5\n"),
              Contains("line 18: controller.horizon_s = 1.5, shorter than the maneuver (maneuver.duration_min_s = 2)"));
+  // A rejected maneuver duration is reported once; the horizon is not compared with a value
+  // the file does not hold (once the midpoint of the default duration bounds, 5.05 s).
+  for (const char* bad : {"duration_s = 0\n", "duration_s = \"x\"\n"}) {
+    const std::string problems = problems_of(maneuver_then_controller(bad) + "horizon_s = 5.0\n");
+    CHECK_THAT(problems, Contains("line 12: maneuver.duration_s"));
+    CHECK_THAT(problems, !Contains("horizon_s"));
+  }
+  // An actuator rejected for a bad field is not reported again, as unknown, where it is named.
+  const std::string bad_hub = kPaperBeam +
+                              "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 7.0\nlimit = 1.0\n" +
+                              "[maneuver]\nactuators = [\"hub\"]\nduration_s = 3.0\n[maneuver.final]\ntheta_deg = 90.0\n" +
+                              "[controller]\nactuators = [\"hub\"]\nhorizon_s = 3.0\n";
+  const std::string hub_problems = problems_of(bad_hub);
+  CHECK_THAT(hub_problems, Contains("line 8: actuator[1].position_m = 7.0, must be in [0, 1]"));
+  CHECK_THAT(hub_problems, !Contains("is not an [[actuator]]"));
+  // A controller that leaves out maneuver actuators names each one it misses.
+  const std::string two_man = kPaperBeam + acts +
+                              "[[actuator]]\nname = \"tip\"\ntype = \"thruster\"\nposition_m = 1.0\n"
+                              "direction = [0.0, 1.0]\nlimit = 1.0\n[maneuver]\nactuators = [\"hub\", \"tip\"]\n"
+                              "duration_s = 3.0\n[maneuver.final]\ntheta_deg = 90.0\n[controller]\nhorizon_s = 3.0\n"
+                              "actuators = [\"hub\"]\n";
+  CHECK_THAT(problems_of(two_man), Contains("must include every maneuver actuator (the feedback adds to their "
+                                            "commands); \"tip\" is missing"));
   CHECK_THAT(problems_of(kPaperBeam + acts + "[controller]\nactuators = [\"rudder\"]\nhorizon_s = 3.0\n"),
              Contains("line 20: controller.actuators: \"rudder\" is not an [[actuator]] (known: 'hub')"));
 }
@@ -437,6 +463,8 @@ TEST_CASE("absurd magnitudes are outside the supported range", "[io]") {
              Contains("line 9: load[1].direction contains 1e+300, each entry must be within [-1e+06, 1e+06]"));
   CHECK_THAT(problems_of(kPaperBeam + replaced(kLoad, "[1.0, -1.0]", "[1e300, -1.0]")),
              Contains("line 13: load[1].profile.values contains 1e+300, each entry must be within [-1e+12, 1e+12]"));
+  CHECK_THAT(problems_of(kPaperBeam + replaced(kLoad, "[0.0, 0.5, 1.0]", "[0.0, nan, 1.0]")),
+             Contains("line 12: load[1].profile.times_s contains nan, each entry must be a finite number"));
   CHECK_THAT(problems_of(kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
                                       "limit = 1e13\n"),
              Contains("line 9: actuator[1].limit = 1e+13, must be at most 1e+12"));

@@ -65,6 +65,12 @@ struct IntegrationResult {
   long steps = 0;
 };
 
+/// True when [a, b] (a <= b) is a span of round-off on a timeline whose times are of size
+/// `scale`: at most a few ulps of the largest of |a|, |b| and scale. integrate() does not
+/// step over such a piece (CVODE cannot; the state changes over it by round-off only), and
+/// simulations merge a load breakpoint that close to another into it.
+bool roundoff_span(double a, double b, double scale);
+
 /// Integrates from x0 at output_times.front() and records x at each output time
 /// (ascending, at least one). `breakpoints` (any order, any count; those outside the
 /// span are ignored) split the span into pieces. Throws std::invalid_argument for bad
