@@ -116,7 +116,7 @@ const Range kMass = Range::positive().supported(lim::kMinMass_kg, lim::kMaxMass_
 const Range kMassPerLength = Range::positive().supported(lim::kMinMassPerLength_kg_m, lim::kMaxMassPerLength_kg_m);
 const Range kStiffness = Range::positive().supported(lim::kMinBendingStiffness_Nm2, lim::kMaxBendingStiffness_Nm2);
 const Range kMassOrZero = Range::nonnegative().supported(-kInf, lim::kMaxMass_kg);
-const Range kTime = Range::positive().supported(-kInf, lim::kMaxTime_s);
+const Range kTime = Range::positive().supported(lim::kMinDuration_s, lim::kMaxTime_s);  // durations, horizons
 const Range kWeight = Range::nonnegative().supported(-kInf, lim::kMaxWeight);
 const Range kCommand = Range::positive().supported(-kInf, lim::kMaxCommand);  // limits, rate limits
 

@@ -264,10 +264,8 @@ void validate(const OdeSystem& system, const Eigen::Ref<const Eigen::VectorXd>& 
 
 }  // namespace
 
-// Relative to the timeline, not only to a and b: near t = 0 both are tiny, and CVODE takes a
-// stop time 1e-300 ahead of t = 0 for one behind it (the product of two such spans underflows).
-bool roundoff_span(double a, double b, double scale) {
-  return b - a <= 4.0 * DBL_EPSILON * std::max({std::abs(a), std::abs(b), scale});
+bool roundoff_span(double a, double b) {
+  return b - a <= 4.0 * DBL_EPSILON * std::max(std::abs(a), std::abs(b)) || b - a < kMinSpan_s;
 }
 
 IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eigen::VectorXd>& x0,
@@ -279,7 +277,6 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   const std::size_t n_out = output_times.size();
   const double t0 = output_times.front();
   const double tend = output_times.back();
-  const double t_scale = std::max(std::abs(t0), std::abs(tend));
 
   const VariableChange& change = system.variables;
   if (change.active() && !change.to_x)
@@ -420,7 +417,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   for (std::size_t k = 0; k + 1 < bounds.size(); ++k) {
     const double a = bounds[k];
     const double b = bounds[k + 1];
-    if (roundoff_span(a, b, t_scale)) {  // a roundoff-sized piece: the state is unchanged over it
+    if (roundoff_span(a, b)) {  // a roundoff-sized piece: the state is unchanged over it
       while (next < n_out && output_times[next] <= b) record(output_times[next++], y);
       continue;
     }
@@ -440,7 +437,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     bool stepped = false;    // CVode was called in this piece
     while (next < n_out && output_times[next] <= b) {
       const double tout = output_times[next];
-      if (!at_end && !(!stepped && roundoff_span(a, tout, t_scale))) {
+      if (!at_end && !(!stepped && roundoff_span(a, tout))) {
         int flag = 0;
         const bool ok = advance(tout, flag);
         stepped = true;

@@ -22,15 +22,15 @@ void check_options(const SimulationOptions& o) {
   if (!(o.trajectory_step_s > 0.0)) throw std::invalid_argument("simulation: trajectory_step_s must be > 0");
 }
 
-/// The loads' breakpoints inside (0, t_end), ascending; one within round-off of 0, of t_end
-/// or of the one before it is left out, so that no piece is a span of round-off (the
-/// zero-order trajectory's sampling and Hermite steps divide by a piece's length).
+/// The loads' breakpoints inside (0, t_end), ascending; one that leaves a piece integrate()
+/// would not step over (roundoff_span: from 0, from the one before it, or up to t_end) is left
+/// out, so that every piece has a length to divide by (the zero-order trajectory's samples).
 std::vector<double> breakpoints_within(const Excitation& ex, double t_end) {
   std::vector<double> all = ex.breakpoints(), b;
   std::sort(all.begin(), all.end());
   double last = 0.0;
   for (double t : all)
-    if (t > last && !roundoff_span(last, t, t_end) && !roundoff_span(t, t_end, t_end)) b.push_back(last = t);
+    if (t > last && !roundoff_span(last, t) && !roundoff_span(t, t_end)) b.push_back(last = t);
   return b;
 }
 

@@ -283,7 +283,7 @@ TEST_CASE("counts derived from the design are bounded before any run", "[io]") {
   // without the perturbation solution nothing samples the zero-order motion
   CHECK(problems_of(sim + "duration_s = 5000.0\noutput_step_s = 0.5\nperturbation = false\n").empty());
   CHECK_THAT(problems_of(sim + "duration_s = 1e12\n"),
-             Contains("line 15: simulation.duration_s = 1e+12, must be at most 1e+06 (the supported range)"));
+             Contains("line 15: simulation.duration_s = 1e+12, must be within [1e-06, 1e+06] (the supported range)"));
 
   const std::string hub = "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 1.0\n";  // 14-18
   const std::string ctl = kPaperBeam + kLoad + hub + "[controller]\nactuators = [\"hub\"]\n";  // [controller] line 19
@@ -496,8 +496,11 @@ TEST_CASE("messages: one problem per mistake, shortest numbers, what an array ho
   }
   CHECK_THAT(problems_of("[beam]\nlength_m = -0.1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n"),
              Contains("line 2: beam.length_m = -0.1, must be > 0"));
-  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1e-12\noutput_step_s = 0.002\n"),
-             Contains("line 16: simulation.output_step_s = 0.002 exceeds duration_s = 1e-12; it must not"));
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 0.001\noutput_step_s = 0.002\n"),
+             Contains("line 16: simulation.output_step_s = 0.002 exceeds duration_s = 0.001; it must not"));
+  // a duration below a microsecond, down to 1e-300 (which CVODE cannot start on), is refused
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1e-300\n"),
+             Contains("line 15: simulation.duration_s = 1e-300, must be within [1e-06, 1e+06] (the supported range)"));
   CHECK_THAT(problems_of(kPaperBeam + replaced(kLoad, "[0.0, 0.5, 1.0]", "[[0.0], [0.5], [1.0]]")),
              Contains("line 12: load[1].profile.times_s contains [0.0], must be an array of numbers (not of arrays)"));
 }

@@ -156,16 +156,22 @@ TEST_CASE("roundoff-sized pieces and outputs next to a breakpoint do not fail", 
   CHECK(std::abs(r.x(3, 0) - 0.5) < 1e-14);
   CHECK(std::abs(r.x(4, 0) - 1.0) < 1e-14);
 
-  // A piece [0, 1e-300] at the start of a timeline of size 1: tiny in itself and relative
-  // to its own ends' zero, but round-off on the timeline (CVODE took the stop time 1e-300 for
-  // one behind t = 0 and failed with CV_ILL_INPUT).
-  for (double tiny : {1e-300, 1e-200, 1e-17}) {
+  // A piece [0, 1e-300] is not round-off relative to its ends, but CVODE took the stop time
+  // 1e-300 for one behind t = 0 (CV_ILL_INPUT): pieces under kMinSpan_s are not integrated.
+  for (double tiny : {1e-300, 1e-200, 0.5 * freeflex::kMinSpan_s}) {
     INFO("piece [0, " << tiny << "]");
     const auto s = integrate(sys, Eigen::VectorXd::Zero(1), {0.0, tiny, 1.0}, {tiny}, opt);
     INFO(s.message);
     REQUIRE(s.ok);
     CHECK(s.x(1, 0) == 0.0);  // the skipped piece leaves the state as it was
     CHECK(std::abs(s.x(2, 0) - 1.0) < 1e-14);  // x = t: a few ulp of O(1) values
+  }
+  // Short pieces above it are integrated: x(1e-17) = 1e-17 (round-off of that value).
+  for (double shortp : {1e-17, 2.0 * freeflex::kMinSpan_s}) {
+    const auto s = integrate(sys, Eigen::VectorXd::Zero(1), {0.0, shortp, 1.0}, {shortp}, opt);
+    INFO(s.message);
+    REQUIRE(s.ok);
+    CHECK(s.x(1, 0) == Approx(shortp).epsilon(1e-12));
   }
 }
 

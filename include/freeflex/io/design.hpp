@@ -23,6 +23,7 @@ namespace freeflex {
 namespace design_limits {
 inline constexpr std::size_t kMaxFileBytes = 1 << 20;     ///< a design file: 1 MiB
 inline constexpr double kMaxTime_s = 1e6;                 ///< any time, duration or horizon
+inline constexpr double kMinDuration_s = 1e-6;            ///< any duration or horizon
 inline constexpr double kMaxOutputRows = 200000;          ///< output rows per series, TV-LQR grid points
 inline constexpr double kMaxTrajectorySamples = 1000000;  ///< samples of the zero-order motion
 inline constexpr int kMaxIntervals = 5000;                ///< collocation intervals (trajopt's max_intervals)

@@ -65,11 +65,16 @@ struct IntegrationResult {
   long steps = 0;
 };
 
-/// True when [a, b] (a <= b) is a span of round-off on a timeline whose times are of size
-/// `scale`: at most a few ulps of the largest of |a|, |b| and scale. integrate() does not
-/// step over such a piece (CVODE cannot; the state changes over it by round-off only), and
-/// simulations merge a load breakpoint that close to another into it.
-bool roundoff_span(double a, double b, double scale);
+/// Spans shorter than this (seconds) are not integrated: CVODE takes a stop time so close
+/// to t for one behind it (the product of two such spans underflows), and no load acting
+/// for that long (at most 1e12 N by the design limits) moves anything.
+inline constexpr double kMinSpan_s = 1e-100;
+
+/// True when [a, b] (a <= b) cannot be integrated and need not be: within a few ulps of its
+/// ends (CVODE's CV_TOO_CLOSE; the state changes by round-off only) or shorter than
+/// kMinSpan_s. integrate() does not step over such a piece, and simulations merge a load
+/// breakpoint that close to another into it.
+bool roundoff_span(double a, double b);
 
 /// Integrates from x0 at output_times.front() and records x at each output time
 /// (ascending, at least one). `breakpoints` (any order, any count; those outside the
