@@ -645,32 +645,25 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
   st.input_weights = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(m));
   if (c.has("input_weights")) {
     auto w = c.number_array("input_weights", Range().supported(-lim::kMaxWeight, lim::kMaxWeight), false);
-    bool pd = true, sane = true;
-    if (w)
-      for (double x : *w) {
-        pd = pd && x > 0.0;
-        sane = sane && x >= lim::kMinInputWeight;
+    if (w) {  // else reported by number_array, which returns no empty array
+      const auto [lo, hi] = std::minmax_element(w->begin(), w->end());
+      if (!(*lo > 0.0)) {
+        c.problem("input_weights", c.key_path("input_weights") +
+                                       ": every entry must be > 0 (the input weight R must be positive definite)");
+      } else if (*lo < lim::kMinInputWeight) {
+        c.problem("input_weights", c.key_path("input_weights") + ": every entry must be in [" +
+                                       shortest(lim::kMinInputWeight) + ", " + shortest(lim::kMaxWeight) + "]");
+      } else if (*hi > lim::kMaxInputWeightSpread * *lo) {
+        c.problem("input_weights", c.key_path("input_weights") + " spans " + shortest(*lo) + " to " + shortest(*hi) +
+                                       ", more than a factor " + shortest(lim::kMaxInputWeightSpread) +
+                                       " (R would be numerically singular); rescale the actuators' commands instead");
+      } else if (w->size() != m) {
+        if (names_ok)
+          c.problem("input_weights",
+                    c.key_path("input_weights") + " needs one entry per actuator (" + std::to_string(m) + ")");
+      } else {
+        st.input_weights = Eigen::Map<const Eigen::VectorXd>(w->data(), static_cast<Eigen::Index>(m));
       }
-    if (!w) {
-      // reported by number_array
-    } else if (!pd) {
-      c.problem("input_weights", c.key_path("input_weights") +
-                                     ": every entry must be > 0 (the input weight R must be positive definite)");
-    } else if (!sane) {
-      c.problem("input_weights", c.key_path("input_weights") + ": every entry must be in [" +
-                                     shortest(lim::kMinInputWeight) + ", " + shortest(lim::kMaxWeight) + "]");
-    } else if (*std::max_element(w->begin(), w->end()) > lim::kMaxInputWeightSpread * *std::min_element(w->begin(), w->end())) {
-      c.problem("input_weights", c.key_path("input_weights") + " spans " +
-                                     shortest(*std::min_element(w->begin(), w->end())) + " to " +
-                                     shortest(*std::max_element(w->begin(), w->end())) + ", more than a factor " +
-                                     shortest(lim::kMaxInputWeightSpread) +
-                                     " (R would be numerically singular); rescale the actuators' commands instead");
-    } else if (w->size() != m) {
-      if (names_ok)
-        c.problem("input_weights",
-                  c.key_path("input_weights") + " needs one entry per actuator (" + std::to_string(m) + ")");
-    } else {
-      st.input_weights = Eigen::Map<const Eigen::VectorXd>(w->data(), static_cast<Eigen::Index>(m));
     }
   }
   if (st.weight_elastic + st.weight_rigid_position + st.weight_rigid_rate <= 0.0)
