@@ -59,16 +59,12 @@ import os
 import sys
 import time
 
-try:
-    import numpy as np
-    import scipy.linalg as sl
-    from scipy.integrate import solve_ivp
-    from scipy.optimize import brentq
-    import sympy as sp
-except ImportError:  # the pyenv python3 lacks numpy: rerun with Debian's python3
-    if os.path.exists("/usr/bin/python3") and sys.executable != "/usr/bin/python3":
-        os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
-    raise
+import reexec  # noqa: F401  (first: may re-run this script with Debian's python3)
+import numpy as np
+import scipy.linalg as sl
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+import sympy as sp
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUTDIR = os.path.join(HERE, "..", "..", "tests", "reference")

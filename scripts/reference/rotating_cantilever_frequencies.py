@@ -40,20 +40,15 @@ wbar_inplane, wbar_flap, wbar2_nostiff, wbar_shoot, rel_shoot, wbar_pfem, rel_pf
 dimensionless: divide by sqrt(rhoA L^4/EI) for rad/s). Run time: ~70 s.
 """
 import os
-import sys
 
-try:
-    import numpy as np
-    import mpmath as mp
-    from scipy.integrate import solve_ivp
-    from scipy.optimize import brentq
-except ImportError:  # the pyenv python3 lacks numpy: rerun with Debian's python3
-    if os.path.exists("/usr/bin/python3") and sys.executable != "/usr/bin/python3":
-        os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
-    raise
+import reexec  # noqa: F401  (first: may re-run this script with Debian's python3)
+import numpy as np
+import mpmath as mp
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import beam_pfem  # noqa: E402
+import beam_pfem  # the script's folder is on sys.path
+import mp_roots
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "..", "..", "tests", "reference", "rotating_cantilever_frequencies.csv")
@@ -82,17 +77,7 @@ def series_det(wbar, gamma, s, nterms):
 def roots_series(gamma, s, count, dps, nterms):
     with mp.workdps(dps):
         f = lambda w: series_det(w, gamma, s, nterms)
-        roots = []
-        k_prev = mp.mpf("0.3")
-        f_prev = f(k_prev**2)
-        step = mp.mpf("0.02")
-        while len(roots) < count:
-            k = k_prev + step
-            fk = f(k**2)
-            if mp.sign(fk) != mp.sign(f_prev):
-                roots.append(mp.findroot(f, (k_prev**2, k**2), solver="anderson"))
-            k_prev, f_prev = k, fk
-        return roots
+        return mp_roots.bracketed_roots(f, count, "0.3", "0.02")
 
 
 # ---------------------------------------------------------------- method 2

@@ -37,21 +37,16 @@ Writes tests/reference/stepped_beam_frequencies.csv (columns: case, mode, omega_
 lambda, omega_pfem_rad_s, rel_diff). lambda = sqrt(omega) (m_ref L^4/EI_ref)^(1/4) with
 m_ref, EI_ref of the first (left) segment, L = 1 m; for the uniform beam it is the
 classical lambda.
-Run time: ~10 s.
+Run time: 10-30 s.
 """
 import os
-import sys
 
-try:
-    import numpy as np
-    import mpmath as mp
-except ImportError:  # the pyenv python3 lacks numpy: rerun with Debian's python3
-    if os.path.exists("/usr/bin/python3") and sys.executable != "/usr/bin/python3":
-        os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
-    raise
+import reexec  # noqa: F401  (first: may re-run this script with Debian's python3)
+import numpy as np
+import mpmath as mp
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import beam_pfem  # noqa: E402
+import beam_pfem  # the script's folder is on sys.path
+import mp_roots
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "..", "..", "tests", "reference", "stepped_beam_frequencies.csv")
@@ -122,19 +117,7 @@ def characteristic(case, omega):
 def roots_transfer(case, count, dps):
     with mp.workdps(dps):
         f = lambda om: characteristic(case, om)
-        # scan in sqrt(omega) (proportional to the wave number) with a fine step
-        roots = []
-        k = mp.mpf("0.05")
-        step = mp.mpf("0.01")
-        prev_k, prev_f = k, f(k**2)
-        while len(roots) < count:
-            k2 = prev_k + step
-            f2 = f(k2**2)
-            if mp.sign(f2) != mp.sign(prev_f):
-                r = mp.findroot(f, (prev_k**2, k2**2), solver="anderson")
-                roots.append(r)
-            prev_k, prev_f = k2, f2
-        return roots
+        return mp_roots.bracketed_roots(f, count, "0.05", "0.01")
 
 
 # ---------------------------------------------------------------- method 2

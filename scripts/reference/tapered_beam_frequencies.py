@@ -38,20 +38,15 @@ Writes tests/reference/tapered_beam_frequencies.csv (columns: case, mode, omega_
 omega_shoot_rad_s, rel_shoot, omega_pfem_rad_s, rel_pfem). Run time: ~80 s.
 """
 import os
-import sys
 
-try:
-    import numpy as np
-    import mpmath as mp
-    from scipy.integrate import solve_ivp
-    from scipy.optimize import brentq
-except ImportError:  # the pyenv python3 lacks numpy: rerun with Debian's python3
-    if os.path.exists("/usr/bin/python3") and sys.executable != "/usr/bin/python3":
-        os.execv("/usr/bin/python3", ["/usr/bin/python3"] + sys.argv)
-    raise
+import reexec  # noqa: F401  (first: may re-run this script with Debian's python3)
+import numpy as np
+import mpmath as mp
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import beam_pfem  # noqa: E402
+import beam_pfem  # the script's folder is on sys.path
+import mp_roots
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "..", "..", "tests", "reference", "tapered_beam_frequencies.csv")
@@ -113,17 +108,7 @@ def roots_series(m_tip, count, dps, nterms):
     with mp.workdps(dps):
         mt = mp.mpf(m_tip)
         f = lambda om: series_det(om, mt, nterms)
-        roots = []
-        k_prev = mp.mpf("0.5")
-        f_prev = f(k_prev**2)
-        step = mp.mpf("0.05")
-        while len(roots) < count:
-            k = k_prev + step
-            fk = f(k**2)
-            if mp.sign(fk) != mp.sign(f_prev):
-                roots.append(mp.findroot(f, (k_prev**2, k**2), solver="anderson"))
-            k_prev, f_prev = k, fk
-        return roots
+        return mp_roots.bracketed_roots(f, count, "0.5", "0.05")
 
 
 # ---------------------------------------------------------------- method 2
