@@ -34,7 +34,7 @@ int main() {
   // Open loop: the perturbation solution gives the nominal (zero-order) motion.
   const PerturbationResult pert = simulate_perturbation(body, loads, so);
   const SimulationResult open = simulate_full(body, loads, so);
-  if (!pert.total.ok || !open.ok) {
+  if (!pert.total.ok() || !open.ok()) {
     std::printf("open-loop simulation failed\n");
     return 1;
   }
@@ -43,11 +43,9 @@ int main() {
   const std::vector<int> inputs{1, 2, 3};
   const FirstOrderModel model(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
   const Eigen::Vector3d limits(1.0, 2.0, 2.0);
-  TvlqrOptions o;
-  o.tf = 3.0;
-  o.Q = vibration_weight(body, 1.0, 10.0, 1.0);
-  o.R = limits.cwiseInverse().cwiseAbs2().asDiagonal();
-  const TvlqrResult law = solve_tvlqr(model, o);
+  const Eigen::MatrixXd Q = vibration_weight(body, 1.0, 10.0, 1.0);
+  const Eigen::MatrixXd R = limits.cwiseInverse().cwiseAbs2().asDiagonal();
+  const TvlqrResult law = solve_tvlqr(model, 0.0, 3.0, Q, R);
   if (!law.ok()) {
     std::printf("TV-LQR failed: %s\n", law.message.c_str());
     return 1;
@@ -57,7 +55,7 @@ int main() {
   ClosedLoopOptions co;
   co.limits = limits;
   const ClosedLoopResult closed = simulate_closed_loop_full(model, loads, {}, law, co);
-  if (!closed.ok) {
+  if (!closed.ok()) {
     std::printf("closed-loop simulation failed: %s\n", closed.message.c_str());
     return 1;
   }

@@ -29,7 +29,7 @@ ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary
   const ManeuverStudy& st = *design.maneuver;
   const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
   TrajoptOptions opt = st.options;
-  opt.verbose = opt.verbose && !quiet && out.log() != nullptr;
+  opt.verbose = !st.quiet && !quiet && out.log() != nullptr;
   std::ostream* log = out.log();
   if (log)
     *log << "maneuver: " << to_string(opt.transcription) << ", " << opt.intervals << " intervals, "
@@ -60,7 +60,7 @@ ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary
          << std::setprecision(3) << r.solve_time_s << " s; objective " << std::defaultfloat << r.objective
          << ", duration " << r.duration_s << " s, max defect " << r.max_defect << '\n';
   Json j = Json::object();
-  j["status"] = r.success() ? "ok" : to_string(r.status);
+  j["status"] = r.ok() ? "ok" : to_string(r.status);
   j["message"] = r.message;
   j["objective"] = r.objective;
   j["iterations"] = r.iterations;
@@ -71,7 +71,7 @@ ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary
   j["intervals"] = r.intervals;
   summary["maneuver"] = j;
   ManeuverOutcome outcome;
-  if (!r.success()) {
+  if (!r.ok()) {
     out.warn("maneuver optimization did not succeed (" + std::string(to_string(r.status)) + "): " + r.message +
              "; no trajectory was written");
     outcome.code = kExitNumericalFailure;

@@ -54,8 +54,8 @@ Eigen::MatrixXd response_table(const FlexibleBody& body, const SimulationResult&
 
 Json run_stats(const SimulationResult& r) {
   Json j = Json::object();
-  j["status"] = r.ok ? "ok" : "failed";
-  if (!r.ok) j["message"] = r.message;
+  j["status"] = r.ok() ? "ok" : "failed";
+  if (!r.ok()) j["message"] = r.message;
   j["rhs_evaluations"] = static_cast<double>(r.rhs_evaluations);
   j["steps"] = static_cast<double>(r.steps);
   j["wall_time_s"] = r.wall_time_s;
@@ -107,10 +107,10 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
     SimulationOptions o = st.options;
     o.integrator.progress = progress.callback();
     nl = simulate_full(body, ex, o);
-    if (log) *log << progress.resume() << (nl.ok ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
+    if (log) *log << progress.resume() << (nl.ok() ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
                   << nl.wall_time_s << " s)" << std::defaultfloat << '\n';
     Json j = run_stats(nl);
-    if (nl.ok) {
+    if (nl.ok()) {
       nl_table = response_table(body, nl, &full, header);
       out.csv("nonlinear.csv", header, nl_table);
       const int ce = 1 + 2 * (3 + n) + 2;  // vibration_energy_J column (after t, z, z', two tips)
@@ -138,12 +138,12 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
     const PerturbationResult p =
         nominal ? simulate_perturbation_about(body, ex, nominal, o) : simulate_perturbation(body, ex, o);
     pt = p.total;
-    if (log) *log << progress.resume() << (pt.ok ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
+    if (log) *log << progress.resume() << (pt.ok() ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
                   << pt.wall_time_s << " s)" << std::defaultfloat << '\n';
     Json j = run_stats(pt);
     j["zero_order_rhs_evaluations"] = static_cast<double>(p.zero_order.rhs_evaluations);
     j["first_order_rhs_evaluations"] = static_cast<double>(p.first_order_rhs_evaluations);
-    if (pt.ok) {
+    if (pt.ok()) {
       pt_table = response_table(body, pt, nullptr, header);
       out.csv("perturbation.csv", header, pt_table);
       j["residual_vibration_energy_J"] = pt_table(pt_table.rows() - 1, 1 + 2 * (3 + n) + 2);
@@ -153,7 +153,7 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
     }
     js["perturbation"] = j;
   }
-  const bool both = nl.ok && pt.ok && st.nonlinear && st.perturbation;
+  const bool both = nl.ok() && pt.ok() && st.nonlinear && st.perturbation;
   if (both) {
     const Eigen::MatrixXd dz = (nl.z - pt.z).cwiseAbs();
     Json diff = Json::object();
@@ -168,17 +168,17 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
   }
 
   // Figures in the manner of the paper's Figs. 4-7: both solutions overlaid.
-  if (nl.ok || pt.ok) {
-    const Eigen::MatrixXd& any = nl.ok ? nl.z : pt.z;
+  if (nl.ok() || pt.ok()) {
+    const Eigen::MatrixXd& any = nl.ok() ? nl.z : pt.z;
     auto moves = [&](int c) {
       double m = any.col(c).cwiseAbs().maxCoeff();
-      if (nl.ok && pt.ok) m = std::max(m, pt.z.col(c).cwiseAbs().maxCoeff());
+      if (nl.ok() && pt.ok()) m = std::max(m, pt.z.col(c).cwiseAbs().maxCoeff());
       return m > 1e-9;
     };
     auto series = [&](int col, const std::string& what) {
       std::vector<PlotSeries> s;
-      if (nl.ok) s.push_back({"nonlinear.csv", 1, col, what + " full nonlinear", "lines"});
-      if (pt.ok) s.push_back({"perturbation.csv", 1, col, what + " perturbation", "lines dt 2"});
+      if (nl.ok()) s.push_back({"nonlinear.csv", 1, col, what + " full nonlinear", "lines"});
+      if (pt.ok()) s.push_back({"perturbation.csv", 1, col, what + " perturbation", "lines dt 2"});
       return s;
     };
     PlotSpec rigid{st.rigid_figure, "Rigid-body motion: " + design.title, {}};

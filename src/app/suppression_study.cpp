@@ -34,10 +34,8 @@ std::string num(double v) { return std::isnan(v) ? "" : util::format_number(v, 1
 Eigen::MatrixXd element_commands(const Excitation& ex, int elements, const Eigen::VectorXd& t,
                                  const std::vector<int>& actuators, const Eigen::MatrixXd* actuator_commands) {
   Eigen::MatrixXd c(t.size(), elements);
-  Eigen::VectorXd u(elements);
   for (int i = 0; i < t.size(); ++i) {
-    ex.evaluate(Instant::at(t(i)), u);
-    c.row(i) = u.transpose();
+    c.row(i) = ex.commands(Instant::at(t(i))).transpose();
     if (actuator_commands)
       for (std::size_t k = 0; k < actuators.size(); ++k) c(i, actuators[k]) = (*actuator_commands)(i, k);
   }
@@ -101,11 +99,11 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   sim_p.integrator.progress = open_progress.callback();
   const PerturbationResult pert = nominal ? simulate_perturbation_about(body, nominal_ex, nominal, sim_p)
                                           : simulate_perturbation(body, nominal_ex, sim_p);
-  if (!pert.total.ok) throw std::runtime_error("open-loop perturbation simulation failed: " + pert.total.message);
+  if (!pert.total.ok()) throw std::runtime_error("open-loop perturbation simulation failed: " + pert.total.message);
   if (!nominal) nominal = pert.nominal;
   sim_p.integrator.progress = [&open_progress, &sim](double t) { open_progress.update(sim.duration_s + t); };
   const SimulationResult full = simulate_full(body, nominal_ex, sim_p);
-  if (!full.ok) throw std::runtime_error("open-loop full simulation failed: " + full.message);
+  if (!full.ok()) throw std::runtime_error("open-loop full simulation failed: " + full.message);
   if (log) *log << open_progress.resume() << "done\n";
   const std::vector<int> none;
   cases.push_back({"open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
@@ -116,16 +114,14 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   // TV-LQR on the first-order model.
   const FirstOrderModel fo(body, *nominal, nominal_element_commands(loads, st.actuators, u0), st.actuators);
   TvlqrOptions to;
-  to.t0 = 0.0;
-  to.tf = st.horizon_s;
-  to.Q = vibration_weight(body, st.weight_elastic, st.weight_rigid_position, st.weight_rigid_rate);
-  to.R = st.input_weights.asDiagonal();
+  const Eigen::MatrixXd Q = vibration_weight(body, st.weight_elastic, st.weight_rigid_position, st.weight_rigid_rate);
+  const Eigen::MatrixXd R = st.input_weights.asDiagonal();
   to.grid_step_s = st.grid_step_s;
   for (double b : loads.breakpoints()) to.breakpoints.push_back(b);
   if (log) *log << "suppression: TV-LQR over " << st.horizon_s << " s ... " << std::flush;
   ProgressReport riccati_progress(log, st.horizon_s);  // the backward sweep, tf - t
   to.progress = riccati_progress.callback();
-  const TvlqrResult law = solve_tvlqr(fo, to);
+  const TvlqrResult law = solve_tvlqr(fo, 0.0, st.horizon_s, Q, R, to);
   if (log) *log << riccati_progress.resume() << (law.ok() ? "done" : "FAILED") << " (" << std::fixed << std::setprecision(3) << law.wall_time_s
                 << " s)" << std::defaultfloat << '\n';
   Json js = Json::object();
@@ -162,7 +158,7 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
   if (log) *log << closed_progress.resume() << "done\n";
   int code = kExitOk;
   for (const auto* r : {&cl1, &cl2}) {
-    if (!r->ok) {
+    if (!r->ok()) {
       out.warn("closed-loop simulation failed: " + r->message);
       code = kExitNumericalFailure;
       continue;
@@ -193,14 +189,10 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
     }
     for (int k : turns ? bb.modes : std::vector<int>{}) {
       SwitchTimeOptions so;
-      so.actuator = bb.actuator;
-      so.rotation_rad = rotation;
-      so.torque_limit_Nm = limit;
-      so.modes = k;
       if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ... " << std::flush;
       ProgressReport progress(log, 0.0);
       so.progress = [&progress](int sims) { progress.note(std::to_string(sims) + " first-order simulations"); };
-      const SwitchTimeResult sw = design_switch_times(body, so);
+      const SwitchTimeResult sw = design_switch_times(body, bb.actuator, rotation, limit, k, so);
       if (log) *log << progress.resume() << (sw.ok() ? "done" : "FAILED") << ", duration " << sw.duration_s << " s (rigid T* "
                     << sw.rigid_duration_s << " s), residual/rigid peak " << sw.residual_ratio << '\n';
       Json e = Json::object();
@@ -224,16 +216,16 @@ int run_suppression(const Design& design, RunOutput& out, Json& summary, const M
       const PerturbationResult bp = simulate_perturbation(body, ex, sim);
       const SimulationResult bf = simulate_full(body, ex, sim);
       const std::string name = "bang_bang_k" + std::to_string(k);
-      if (bp.total.ok)
+      if (bp.total.ok())
         cases.push_back({name, "first_order", bp.total.t, bp.total.z, bp.total.z_dot,
                          element_commands(ex, ne, bp.total.t, none, nullptr)});
       else
         out.warn(name + " perturbation simulation failed: " + bp.total.message);
-      if (bf.ok)
+      if (bf.ok())
         cases.push_back({name, "nonlinear", bf.t, bf.z, bf.z_dot, element_commands(ex, ne, bf.t, none, nullptr)});
       else
         out.warn(name + " full simulation failed: " + bf.message);
-      if (!bp.total.ok || !bf.ok) code = kExitNumericalFailure;
+      if (!bp.total.ok() || !bf.ok()) code = kExitNumericalFailure;
     }
     js["bang_bang"] = jb;
   }

@@ -1,3 +1,5 @@
+// Steady-state LQR: the CARE by the stable invariant subspace with Newton–Kleinman polish,
+// uncontrollable modes split off; weight checks and the vibration weight.
 #include "freeflex/control/lqr.hpp"
 
 #include <algorithm>
@@ -8,6 +10,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "control/lyapunov_solvers.hpp"
 #include "freeflex/control/lyapunov.hpp"
 #include "util/format.hpp"
 
@@ -236,6 +239,17 @@ void check_positive_definite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, 
     throw std::invalid_argument(where + ": " + name + " must be positive definite: smallest eigenvalue " + fmt(lo));
 }
 
+namespace {
+bool care_options_valid(const CareOptions& opt) {
+  return opt.controllability_tolerance > 0.0 && opt.imaginary_axis_tolerance > 0.0 && opt.max_newton_iterations >= 0;
+}
+}  // namespace
+
+void validate(const CareOptions& opt) {
+  if (!care_options_valid(opt))
+    throw std::invalid_argument("CARE options: tolerances must be > 0 and max_newton_iterations >= 0");
+}
+
 CareResult solve_care(const Eigen::Ref<const Eigen::MatrixXd>& A_in, const Eigen::Ref<const Eigen::MatrixXd>& B_in,
                       const Eigen::Ref<const Eigen::MatrixXd>& Q_in, const Eigen::Ref<const Eigen::MatrixXd>& R_in,
                       const CareOptions& opt) {
@@ -251,8 +265,7 @@ CareResult solve_care(const Eigen::Ref<const Eigen::MatrixXd>& A_in, const Eigen
   if (!B_in.allFinite()) throw std::invalid_argument(where + ": B has a non-finite entry");
   check_positive_semidefinite(Q_in, n, "Q", where);
   check_positive_definite(R_in, m, "R", where);
-  if (!(opt.controllability_tolerance > 0.0) || !(opt.imaginary_axis_tolerance > 0.0) ||
-      opt.max_newton_iterations < 0)
+  if (!care_options_valid(opt))
     throw std::invalid_argument(where + ": tolerances must be > 0 and max_newton_iterations >= 0");
 
   const Eigen::MatrixXd A = A_in, B = B_in;
