@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <optional>
+#include <utility>
 #include <sstream>
 #include <stdexcept>
 
@@ -216,27 +218,33 @@ Eigen::MatrixXd riccati_residual(const Eigen::MatrixXd& A, const Eigen::MatrixXd
 
 }  // namespace
 
-void check_positive_semidefinite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, const std::string& name,
-                                 const std::string& where) {
+namespace {
+/// The smallest eigenvalue of W's symmetric part and the largest magnitude, after the
+/// size check; none for an empty W.
+std::optional<std::pair<double, double>> eigenvalue_range(const Eigen::Ref<const Eigen::MatrixXd>& W, int n,
+                                                          const std::string& name, const std::string& where) {
   check_square(W, n, name, where);
-  if (n == 0) return;
+  if (n == 0) return std::nullopt;
   const Eigen::MatrixXd Ws = 0.5 * (W + W.transpose());
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Ws, Eigen::EigenvaluesOnly);
-  const double lo = es.eigenvalues()(0), hi = es.eigenvalues().cwiseAbs().maxCoeff();
-  if (lo < -1e-10 * hi)
+  return std::make_pair(es.eigenvalues()(0), es.eigenvalues().cwiseAbs().maxCoeff());
+}
+}  // namespace
+
+void check_positive_semidefinite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, const std::string& name,
+                                 const std::string& where) {
+  const auto range = eigenvalue_range(W, n, name, where);
+  if (range && range->first < -1e-10 * range->second)
     throw std::invalid_argument(where + ": " + name + " must be positive semidefinite: smallest eigenvalue " +
-                                fmt(lo));
+                                fmt(range->first));
 }
 
 void check_positive_definite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, const std::string& name,
                              const std::string& where) {
-  check_square(W, n, name, where);
-  if (n == 0) return;
-  const Eigen::MatrixXd Ws = 0.5 * (W + W.transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Ws, Eigen::EigenvaluesOnly);
-  const double lo = es.eigenvalues()(0), hi = es.eigenvalues().cwiseAbs().maxCoeff();
-  if (!(lo > 1e-14 * hi) || !(lo > 0.0))
-    throw std::invalid_argument(where + ": " + name + " must be positive definite: smallest eigenvalue " + fmt(lo));
+  const auto range = eigenvalue_range(W, n, name, where);
+  if (range && (!(range->first > 1e-14 * range->second) || !(range->first > 0.0)))
+    throw std::invalid_argument(where + ": " + name + " must be positive definite: smallest eigenvalue " +
+                                fmt(range->first));
 }
 
 namespace {

@@ -51,30 +51,19 @@ TEST_CASE("every Options struct's defaults are valid", "[api]") {
   CHECK_NOTHROW(validate(SuppressionOptions{}));
   CHECK_NOTHROW(validate(RunOptions{}));  // no directory: the studies run, nothing is written
   // and each validate() does reject a setting out of range, naming it
-  IntegratorOptions io;
-  io.rtol = -1.0;
-  CHECK_THROWS_WITH(validate(io), Contains("rtol = -1"));
-  SimulationOptions so;
-  so.output_step_s = 5.0;
-  CHECK_THROWS_WITH(validate(so), Contains("output_step_s = 5 exceeds duration_s = 3"));
-  TrajoptOptions to;
-  to.intervals = 0;
-  CHECK_THROWS_WITH(validate(to), Contains("intervals = 0"));
-  CareOptions co;
-  co.max_newton_iterations = -1;
-  CHECK_THROWS_WITH(validate(co), Contains("max_newton_iterations"));
-  TvlqrOptions tv;
-  tv.grid_step_s = 0.0;
-  CHECK_THROWS_WITH(validate(tv), Contains("grid_step_s = 0"));
-  ClosedLoopOptions cl;
-  cl.output_step_s = -1.0;
-  CHECK_THROWS_WITH(validate(cl), Contains("output_step_s = -1"));
-  SwitchTimeOptions sw;
-  sw.starts = 0;
-  CHECK_THROWS_WITH(validate(sw), Contains("starts"));
-  SuppressionOptions su;
-  su.tvlqr.rtol = 0.0;
-  CHECK_THROWS_WITH(validate(su), Contains("rtol"));
+  auto rejects = [](auto options, auto spoil, const std::string& expect) {
+    spoil(options);
+    CHECK_THROWS_WITH(validate(options), Contains(expect));
+  };
+  rejects(IntegratorOptions{}, [](auto& o) { o.rtol = -1.0; }, "rtol = -1");
+  rejects(SimulationOptions{}, [](auto& o) { o.output_step_s = 5.0; }, "output_step_s = 5 exceeds duration_s = 3");
+  rejects(TrajoptOptions{}, [](auto& o) { o.intervals = 0; }, "intervals = 0");
+  rejects(CareOptions{}, [](auto& o) { o.max_newton_iterations = -1; }, "max_newton_iterations");
+  rejects(TvlqrOptions{}, [](auto& o) { o.grid_step_s = 0.0; }, "grid_step_s = 0");
+  rejects(ClosedLoopOptions{}, [](auto& o) { o.output_step_s = -1.0; }, "output_step_s = -1");
+  rejects(SwitchTimeOptions{}, [](auto& o) { o.starts = 0; }, "starts");
+  rejects(SuppressionOptions{}, [](auto& o) { o.tvlqr.rtol = 0.0; }, "rtol");
+  rejects(RunOptions{}, [](auto& o) { o.out_dir = std::string("a\0b", 3); }, "out_dir");
 }
 
 TEST_CASE("every public enum round-trips through its names", "[api]") {
