@@ -122,11 +122,12 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
     const std::string name = "bang_bang_k" + std::to_string(k);
     if (bp.total.ok())
       r.cases.push_back({name, "first_order", bp.total.t, bp.total.z, bp.total.z_dot,
-                         element_commands(ex, ne, bp.total.t, {}, nullptr)});
+                         element_commands(ex, ne, bp.total.t, {}, nullptr), 0.0, {}});
     else
       warn(name + " perturbation simulation failed: " + bp.total.message);
     if (bf.ok())
-      r.cases.push_back({name, "nonlinear", bf.t, bf.z, bf.z_dot, element_commands(ex, ne, bf.t, {}, nullptr)});
+      r.cases.push_back(
+          {name, "nonlinear", bf.t, bf.z, bf.z_dot, element_commands(ex, ne, bf.t, {}, nullptr), 0.0, {}});
     else
       warn(name + " full simulation failed: " + bf.message);
   }
@@ -180,9 +181,9 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   const PerturbationResult& pert = chain.open_loop_first_order;
   const SimulationResult& full = chain.open_loop_full;
   r.cases.push_back({"open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
-                     element_commands(nominal_ex, ne, pert.total.t, {}, nullptr)});
+                     element_commands(nominal_ex, ne, pert.total.t, {}, nullptr), 0.0, {}});
   r.cases.push_back({"open_loop", "nonlinear", full.t, full.z, full.z_dot,
-                     element_commands(nominal_ex, ne, full.t, {}, nullptr)});
+                     element_commands(nominal_ex, ne, full.t, {}, nullptr), 0.0, {}});
   if (chain.status == Status::TvlqrFailed) {
     fail(chain.message);
     return r;
@@ -194,7 +195,7 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     }
     r.cases.push_back({"tvlqr", c == &chain.closed_loop_first_order ? "first_order" : "nonlinear", c->t, c->z,
                        c->z_dot, element_commands(problem.loads, ne, c->t, st.actuators, &c->commands),
-                       c->saturated_fraction});
+                       c->saturated_fraction, {}});
   }
   if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log);
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "freeflex/control/tvlqr.hpp"
 #include "freeflex/model/beam.hpp"
 #include "freeflex/model/loads.hpp"
 #include "freeflex/sim/simulate.hpp"
@@ -110,7 +111,7 @@ struct ControllerStudy {
   double weight_rigid_position = 1.0;
   double weight_rigid_rate = 1.0;
   Eigen::VectorXd input_weights;    ///< R diagonal, one per actuator (> 0)
-  double grid_step_s = 0.005;
+  double grid_step_s = TvlqrOptions{}.grid_step_s;  ///< spacing of the stored gains
   double simulate_until_s = 0.0;    ///< end of the comparison runs (0: the horizon)
   std::string figure = "comparison";
 };
