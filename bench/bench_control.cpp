@@ -24,6 +24,7 @@ struct Case {
   Excitation loads;
   std::shared_ptr<const RigidTrajectory> nominal;
   std::unique_ptr<FirstOrderModel> model;
+  Eigen::MatrixXd Q, R;
   TvlqrOptions options;
 };
 
@@ -37,17 +38,15 @@ std::unique_ptr<Case> moment_case(int noa, double rtol) {
                     {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}}),
       Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt,
                   std::nullopt}},
-      nullptr, nullptr, TvlqrOptions{}});
+      nullptr, nullptr, Eigen::MatrixXd(), Eigen::MatrixXd(), TvlqrOptions{}});
   SimulationOptions so;
   so.duration_s = 3.0;
   so.output_step_s = 0.01;
   c->nominal = simulate_perturbation(c->body, c->loads, so).nominal;
   const std::vector<int> inputs{1, 2, 3};
   c->model = std::make_unique<FirstOrderModel>(c->body, *c->nominal, nominal_element_commands(c->loads, inputs), inputs);
-  c->options.t0 = 0.0;
-  c->options.tf = 3.0;
-  c->options.Q = vibration_weight(c->body, 1.0, 10.0, 1.0);
-  c->options.R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
+  c->Q = vibration_weight(c->body, 1.0, 10.0, 1.0);
+  c->R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
   c->options.rtol = rtol;
   return c;
 }
@@ -57,7 +56,7 @@ void BM_tvlqr(benchmark::State& state) {
   const auto c = moment_case(static_cast<int>(state.range(0)), rtol);
   TvlqrResult r;
   for (auto _ : state) {
-    r = solve_tvlqr(*c->model, c->options);
+    r = solve_tvlqr(*c->model, 0.0, 3.0, c->Q, c->R, c->options);
     benchmark::DoNotOptimize(r.K.data());
   }
   if (!r.ok()) state.SkipWithError(r.message.c_str());

@@ -46,7 +46,7 @@ void BM_slew(benchmark::State& state) {
     total_s += r.solve_time_s;
     benchmark::DoNotOptimize(r.x.data());
   }
-  if (!r.success()) state.SkipWithError(r.message.c_str());
+  if (!r.ok()) state.SkipWithError(r.message.c_str());
   const double per_solve_s = total_s / static_cast<double>(state.iterations());
   state.counters["ipopt_iter"] = r.iterations;
   state.counters["J"] = r.objective;

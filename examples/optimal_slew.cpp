@@ -33,7 +33,7 @@ int main() {
   o.transcription = Transcription::HermiteSimpson;
   o.intervals = 100;
   const TrajoptResult energy = solve_maneuver(body, p, o);
-  if (!energy.success()) {
+  if (!energy.ok()) {
     std::printf("energy slew failed: %s\n", energy.message.c_str());
     return 1;
   }
@@ -43,7 +43,7 @@ int main() {
   io.rtol = 1e-10;
   io.atol = 1e-12;
   const IntegrationResult replay = replay_open_loop(body, p, energy, io);
-  if (!replay.ok) {
+  if (!replay.ok()) {
     std::printf("replay failed: %s\n", replay.message.c_str());
     return 1;
   }
@@ -62,10 +62,10 @@ int main() {
 
   std::printf("least energy: J = %.5f N^2 s in %d iterations, %.1f ms; replay misses by %.1e m, %.1e rad\n",
               energy.objective, energy.iterations, 1e3 * energy.solve_time_s, pos_err, ang_err);
-  std::printf("least time:   %s, T* = %.4f s in %d iterations\n", fastest.success() ? "converged" : "FAILED",
+  std::printf("least time:   %s, T* = %.4f s in %d iterations\n", fastest.ok() ? "converged" : "FAILED",
               fastest.duration_s, fastest.iterations);
   const bool ok = std::abs(energy.objective - 0.9233) < 1e-3 && pos_err < 1e-4 && ang_err < 1e-4 &&
-                  fastest.success() && std::abs(fastest.duration_s - 2.168) < 2e-3;
+                  fastest.ok() && std::abs(fastest.duration_s - 2.168) < 2e-3;
   std::printf(ok ? "as expected\n" : "NOT as expected\n");
   return ok ? 0 : 1;
 }

@@ -3,7 +3,7 @@
 # Does nothing when everything is already present.
 set -euo pipefail
 packages=(build-essential cmake pkg-config libeigen3-dev coinor-libipopt-dev libnlopt-cxx-dev
-          libsundials-dev catch2 libtomlplusplus-dev gnuplot-nox)
+          libsundials-dev catch2 libtomlplusplus-dev nlohmann-json3-dev libcli11-dev gnuplot-nox)
 if [[ "${FREEFLEX_WITH_BENCH:-0}" == 1 ]]; then packages+=(libbenchmark-dev); fi
 missing=()
 for p in "${packages[@]}"; do

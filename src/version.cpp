@@ -1,3 +1,4 @@
+// freeflex's version and the versions of the numerical libraries it links.
 #include "freeflex/version.hpp"
 
 #include <coin/IpoptConfig.h>

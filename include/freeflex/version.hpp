@@ -1,4 +1,5 @@
 #pragma once
+// freeflex's version and the numerical libraries linked in.
 #include <string>
 
 namespace freeflex {

@@ -1,3 +1,4 @@
+// The closed-form free-free uniform beam: its roots and mode shapes.
 #include "freeflex/analysis/exact_free_free.hpp"
 
 #include <cmath>

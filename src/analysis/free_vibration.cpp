@@ -1,3 +1,5 @@
+// Free vibration of the unconstrained beam: mass and stiffness at rest, modes and
+// frequencies, the paper's λ.
 #include "freeflex/analysis/free_vibration.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// The paper's printed Table 1, verbatim.
 #include "freeflex/analysis/paper_reference.hpp"
 
 namespace freeflex::paper {

@@ -1,14 +1,15 @@
 // [free_vibration]: frequency sweep over NOA (the paper's Table 1) and mode shapes
-// against the exact free-free beam (the paper's Fig. 3).
+// against the exact free-free beam (the paper's Fig. 3): the study, its files and its
+// summary entry.
 #include <cmath>
 #include <iomanip>
 #include <limits>
 #include <sstream>
 
+#include "app/study_files.hpp"
 #include "freeflex/analysis/exact_free_free.hpp"
 #include "freeflex/analysis/free_vibration.hpp"
 #include "freeflex/analysis/paper_reference.hpp"
-#include "freeflex/app/run.hpp"
 #include "freeflex/io/plot.hpp"
 #include "freeflex/model/modal_integrals.hpp"
 
@@ -43,91 +44,120 @@ ModeTable mode_table(const Design& design, int noa) {
   return t;
 }
 
-void run_free_vibration(const Design& design, RunOutput& out, Json& summary) {
+FreeVibrationStudyResult run_free_vibration_study(const Design& design, const StudyLog& study_log) {
   const FreeVibrationStudy& study = *design.free_vibration;
   const Beam beam(design.beam);
   const bool exact = is_plain_uniform(beam);
   const std::vector<int> sweep = study.noa_sweep.empty() ? std::vector<int>{design.noa} : study.noa_sweep;
-  std::ostream* log = out.log();
+  std::ostream* log = study_log.log;
+  FreeVibrationStudyResult r;
 
   // Frequency table, long format: one row per (NOA, mode).
-  std::vector<std::string> header{"noa", "mode", "omega_rad_s", "freq_hz", "lambda"};
-  if (study.paper_table) header.push_back("lambda_paper");
-  if (exact) header.push_back("lambda_exact");
+  r.table_header = {"noa", "mode", "omega_rad_s", "freq_hz", "lambda"};
+  if (study.paper_table) r.table_header.push_back("lambda_paper");
+  if (exact) r.table_header.push_back("lambda_exact");
   int rows = 0;
   for (int n : sweep) rows += std::min(n, study.modes);
-  Eigen::MatrixXd table(rows, static_cast<int>(header.size()));
-  Json freqs = Json::array();
-  int r = 0;
+  r.table.resize(rows, static_cast<int>(r.table_header.size()));
+  int row = 0;
   if (log) *log << "free vibration: " << sweep.size() << " NOA value(s), " << study.modes << " elastic modes\n";
   for (int n : sweep) {
     const ModeTable mt = mode_table(design, n);
-    Json entry = Json::object();
-    entry["noa"] = n;
     const int shown = std::min(n, study.modes);
-    entry["lambda"] = Json::from(mt.lambda.head(shown));
-    entry["omega_rad_s"] = Json::from(mt.omega_rad_s.head(shown));
-    freqs.push_back(entry);
+    r.frequencies.push_back({n, mt.lambda.head(shown), mt.omega_rad_s.head(shown)});
     if (log) *log << "  NOA " << std::setw(3) << n << "  lambda:";
-    for (int k = 1; k <= shown; ++k, ++r) {
+    for (int k = 1; k <= shown; ++k, ++row) {
       int c = 0;
-      table(r, c++) = n;
-      table(r, c++) = k;
-      table(r, c++) = mt.omega_rad_s(k - 1);
-      table(r, c++) = mt.freq_hz(k - 1);
-      table(r, c++) = mt.lambda(k - 1);
-      if (study.paper_table) table(r, c++) = paper::table1(n, k).value_or(kNaN);
-      if (exact) table(r, c++) = free_free_root(k);
+      r.table(row, c++) = n;
+      r.table(row, c++) = k;
+      r.table(row, c++) = mt.omega_rad_s(k - 1);
+      r.table(row, c++) = mt.freq_hz(k - 1);
+      r.table(row, c++) = mt.lambda(k - 1);
+      if (study.paper_table) r.table(row, c++) = paper::table1(n, k).value_or(kNaN);
+      if (exact) r.table(row, c++) = free_free_root(k);
       if (log) *log << ' ' << std::fixed << std::setprecision(6) << mt.lambda(k - 1) << std::defaultfloat;
     }
     if (log) *log << '\n';
   }
-  out.csv(study.table_name + ".csv", header, table);
-  Json fv = Json::object();
-  fv["table"] = study.table_name + ".csv";
-  fv["frequencies"] = freqs;
 
-  Json shapes = Json::array();
   for (const ModeShapeRequest& req : study.mode_shapes) {
     const AdmissibleBasis basis = make_basis(beam, req.noa);
     const FreeVibrationResult res = free_vibration(modal_integrals(beam, basis));
     if (req.mode > res.omega.size()) {
-      out.warn("mode shape '" + req.name + "': NOA " + std::to_string(req.noa) + " has only " +
-               std::to_string(res.omega.size()) + " elastic modes");
+      const std::string why = "mode shape '" + req.name + "': NOA " + std::to_string(req.noa) + " has only " +
+                              std::to_string(res.omega.size()) + " elastic modes";
+      r.warnings.push_back(why);
+      if (study_log.warn) study_log.warn(why);
       continue;
     }
     const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(req.points, beam.x_left(), beam.x_right());
     Eigen::VectorXd w = mode_displacement(basis, res.shapes.col(req.mode - 1), x);
     w /= w.cwiseAbs().maxCoeff();
-    std::vector<std::string> cols{"s_m", "x_m", "w_freeflex"};
-    Eigen::MatrixXd data(req.points, exact ? 4 : 3);
+    FreeVibrationStudyResult::ModeShape shape;
+    shape.name = req.name;
+    shape.noa = req.noa;
+    shape.mode = req.mode;
+    shape.header = {"s_m", "x_m", "w_freeflex"};
+    Eigen::MatrixXd& data = shape.data;
+    data.resize(req.points, exact ? 4 : 3);
     data.col(0) = x.array() - beam.x_left();
     data.col(1) = x;
     data.col(2) = w;
-    Json entry = Json::object();
-    entry["name"] = req.name;
-    entry["noa"] = req.noa;
-    entry["mode"] = req.mode;
     if (exact) {
       Eigen::VectorXd we(req.points);
       for (int i = 0; i < req.points; ++i) we(i) = free_free_shape(req.mode, data(i, 0) / beam.length());
       we /= we.cwiseAbs().maxCoeff();
       if (we.dot(w) < 0.0) we = -we;  // eigenvectors carry an arbitrary sign
       data.col(3) = we;
-      cols.push_back("w_exact");
-      entry["max_abs_difference"] = (w - we).cwiseAbs().maxCoeff();
+      shape.header.push_back("w_exact");
+      shape.max_abs_difference = (w - we).cwiseAbs().maxCoeff();
     }
-    out.csv(req.name + ".csv", cols, data);
+    r.mode_shapes.push_back(std::move(shape));
+  }
+  return r;
+}
+
+namespace detail {
+
+void write_free_vibration(const Design& design, const FreeVibrationStudyResult& r, RunOutput& out) {
+  const FreeVibrationStudy& study = *design.free_vibration;
+  out.csv(study.table_name + ".csv", r.table_header, r.table);
+  for (const auto& shape : r.mode_shapes) {
+    out.csv(shape.name + ".csv", shape.header, shape.data);
     PlotPanel panel{"", "distance from the left end s [m]", "normalized transverse displacement", {}};
-    panel.series.push_back({req.name + ".csv", 1, 3, "freeflex, NOA = " + std::to_string(req.noa), "lines"});
-    if (exact) panel.series.push_back({req.name + ".csv", 1, 4, "exact free-free", "points pt 6 ps 0.8"});
+    panel.series.push_back({shape.name + ".csv", 1, 3, "freeflex, NOA = " + std::to_string(shape.noa), "lines"});
+    if (shape.max_abs_difference)
+      panel.series.push_back({shape.name + ".csv", 1, 4, "exact free-free", "points pt 6 ps 0.8"});
     std::ostringstream title;
-    title << "Elastic mode " << req.mode << " (NOA = " << req.noa << ")";
-    out.plot(PlotSpec{req.name, title.str(), {panel}}, design.plots);
+    title << "Elastic mode " << shape.mode << " (NOA = " << shape.noa << ")";
+    out.plot(PlotSpec{shape.name, title.str(), {panel}}, design.plots);
+  }
+}
+
+Json to_json(const Design& design, const FreeVibrationStudyResult& r) {
+  Json fv = Json::object();
+  fv["table"] = design.free_vibration->table_name + ".csv";
+  Json freqs = Json::array();
+  for (const auto& f : r.frequencies) {
+    Json entry = Json::object();
+    entry["noa"] = f.noa;
+    entry["lambda"] = json_array(f.lambda);
+    entry["omega_rad_s"] = json_array(f.omega_rad_s);
+    freqs.push_back(entry);
+  }
+  fv["frequencies"] = freqs;
+  Json shapes = Json::array();
+  for (const auto& shape : r.mode_shapes) {
+    Json entry = Json::object();
+    entry["name"] = shape.name;
+    entry["noa"] = shape.noa;
+    entry["mode"] = shape.mode;
+    if (shape.max_abs_difference) entry["max_abs_difference"] = *shape.max_abs_difference;
     shapes.push_back(entry);
   }
   fv["mode_shapes"] = shapes;
-  summary["free_vibration"] = fv;
+  return fv;
 }
 
+}  // namespace detail
 }  // namespace freeflex

@@ -1,12 +1,14 @@
 // [simulation]: forced response with the full nonlinear model and the perturbation
-// solution (zero-order then first-order), their differences, energies and momenta
-// (the paper's Figs. 4-7).
+// solution (zero-order then first-order), their differences, energies and momenta (the
+// paper's Figs. 4-7): the study, nonlinear.csv and perturbation.csv with their figures,
+// and its summary entry.
 #include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
 
-#include "freeflex/app/run.hpp"
+#include "app/study_files.hpp"
+#include "freeflex/app/progress.hpp"
 #include "freeflex/dynamics/full_model.hpp"
 #include "freeflex/io/plot.hpp"
 #include "freeflex/sim/simulate.hpp"
@@ -52,16 +54,6 @@ Eigen::MatrixXd response_table(const FlexibleBody& body, const SimulationResult&
   return d;
 }
 
-Json run_stats(const SimulationResult& r) {
-  Json j = Json::object();
-  j["status"] = r.ok ? "ok" : "failed";
-  if (!r.ok) j["message"] = r.message;
-  j["rhs_evaluations"] = static_cast<double>(r.rhs_evaluations);
-  j["steps"] = static_cast<double>(r.steps);
-  j["wall_time_s"] = r.wall_time_s;
-  return j;
-}
-
 /// Largest change over rows with t >= t_from of the quantity in columns [c, c + width),
 /// as a vector norm, relative to `scale`.
 double drift(const Eigen::MatrixXd& d, int c, int width, double t_from, double scale) {
@@ -76,59 +68,63 @@ double drift(const Eigen::MatrixXd& d, int c, int width, double t_from, double s
   return scale > 0.0 ? worst / scale : 0.0;
 }
 
+/// Records a failed run in the study: its reason as a warning and the study's message.
+void fail(SimulationStudyResult& r, const StudyLog& study_log, const std::string& why) {
+  r.status = StudyStatus::Failed;
+  r.message = r.message.empty() ? why : r.message + "; " + why;
+  r.warnings.push_back(why);
+  if (study_log.warn) study_log.warn(why);
+}
+
 }  // namespace
 
-int run_simulation(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver) {
+SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver,
+                                           const StudyLog& study_log) {
   const SimulationStudy& st = *design.simulation;
   const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
   Excitation ex = design.excitation();
   std::shared_ptr<const RigidTrajectory> nominal;
-  if (maneuver && maneuver->trajectory) {
+  if (maneuver && maneuver->flown) {
     // The optimized commands drive their actuators; the optimized motion is the nominal.
-    maneuver->drive(ex);
-    nominal = maneuver->nominal();
+    ex = maneuver->flown->driving(ex);
+    nominal = maneuver->flown->nominal();
   }
   const int n = body.n();
-  std::ostream* log = out.log();
-  Json js = Json::object();
+  std::ostream* log = study_log.log;
+  SimulationStudyResult r;
   const double t_off = ex.end_time();
-  js["loads_end_s"] = t_off;
-  js["nominal"] = nominal ? "optimized maneuver" : "zero-order simulation";
-  js["duration_s"] = st.options.duration_s;
-  int code = kExitOk;
+  r.loads_end_s = t_off;
+  r.about_maneuver = static_cast<bool>(nominal);
+  r.duration_s = st.options.duration_s;
 
-  SimulationResult nl, pt;
-  Eigen::MatrixXd nl_table, pt_table;
-  std::vector<std::string> header;
   const FullModel full(body);
   if (st.nonlinear) {
     if (log) *log << "simulation: full nonlinear model, NOA " << n << ", " << st.options.duration_s << " s ... " << std::flush;
     ProgressReport progress(log, st.options.duration_s);
     SimulationOptions o = st.options;
     o.integrator.progress = progress.callback();
-    nl = simulate_full(body, ex, o);
-    if (log) *log << progress.resume() << (nl.ok ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
+    SimulationStudyResult::Solution s;
+    s.run = simulate_full(body, ex, o);
+    const SimulationResult& nl = s.run;
+    if (log) *log << progress.resume() << (nl.ok() ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
                   << nl.wall_time_s << " s)" << std::defaultfloat << '\n';
-    Json j = run_stats(nl);
-    if (nl.ok) {
-      nl_table = response_table(body, nl, &full, header);
-      out.csv("nonlinear.csv", header, nl_table);
+    if (nl.ok()) {
+      s.table = response_table(body, nl, &full, s.header);
+      const Eigen::MatrixXd& nl_table = s.table;
       const int ce = 1 + 2 * (3 + n) + 2;  // vibration_energy_J column (after t, z, z', two tips)
-      j["residual_vibration_energy_J"] = nl_table(nl_table.rows() - 1, ce);
+      s.residual_vibration_energy_J = nl_table(nl_table.rows() - 1, ce);
       // Invariants after the loads end, relative to their peaks; a momentum that stays
       // near zero is measured against the momentum the peak energy could carry.
       const ModalIntegrals& mi = body.integrals();
       const double E = nl_table.col(ce + 1).cwiseAbs().maxCoeff();
       const double P = std::max(nl_table.middleCols(ce + 2, 2).rowwise().norm().maxCoeff(), std::sqrt(2 * mi.m * E));
       const double H = std::max(nl_table.col(ce + 4).cwiseAbs().maxCoeff(), std::sqrt(2 * mi.I_o * E));
-      j["energy_drift_rel"] = drift(nl_table, ce + 1, 1, t_off, E);
-      j["linear_momentum_drift_rel"] = drift(nl_table, ce + 2, 2, t_off, P);
-      j["angular_momentum_drift_rel"] = drift(nl_table, ce + 4, 1, t_off, H);
+      s.drifts = Eigen::Vector3d(drift(nl_table, ce + 1, 1, t_off, E), drift(nl_table, ce + 2, 2, t_off, P),
+                                 drift(nl_table, ce + 4, 1, t_off, H));
     } else {
-      code = kExitNumericalFailure;
-      out.warn("full nonlinear simulation failed: " + nl.message);
+      fail(r, study_log, "full nonlinear simulation failed: " + nl.message);
     }
-    js["nonlinear"] = j;
+    r.nonlinear = std::move(s);
   }
   if (st.perturbation) {
     if (log) *log << "simulation: perturbation (zero-order, then first-order) ... " << std::flush;
@@ -137,48 +133,57 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
     o.integrator.progress = progress.callback();
     const PerturbationResult p =
         nominal ? simulate_perturbation_about(body, ex, nominal, o) : simulate_perturbation(body, ex, o);
-    pt = p.total;
-    if (log) *log << progress.resume() << (pt.ok ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
+    SimulationStudyResult::Solution s;
+    s.run = p.total;
+    s.zero_order_rhs_evaluations = p.zero_order.rhs_evaluations;
+    s.first_order_rhs_evaluations = p.first_order_rhs_evaluations;
+    const SimulationResult& pt = s.run;
+    if (log) *log << progress.resume() << (pt.ok() ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
                   << pt.wall_time_s << " s)" << std::defaultfloat << '\n';
-    Json j = run_stats(pt);
-    j["zero_order_rhs_evaluations"] = static_cast<double>(p.zero_order.rhs_evaluations);
-    j["first_order_rhs_evaluations"] = static_cast<double>(p.first_order_rhs_evaluations);
-    if (pt.ok) {
-      pt_table = response_table(body, pt, nullptr, header);
-      out.csv("perturbation.csv", header, pt_table);
-      j["residual_vibration_energy_J"] = pt_table(pt_table.rows() - 1, 1 + 2 * (3 + n) + 2);
+    if (pt.ok()) {
+      s.table = response_table(body, pt, nullptr, s.header);
+      s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
     } else {
-      code = kExitNumericalFailure;
-      out.warn("perturbation simulation failed: " + pt.message);
+      fail(r, study_log, "perturbation simulation failed: " + pt.message);
     }
-    js["perturbation"] = j;
+    r.perturbation = std::move(s);
   }
-  const bool both = nl.ok && pt.ok && st.nonlinear && st.perturbation;
-  if (both) {
-    const Eigen::MatrixXd dz = (nl.z - pt.z).cwiseAbs();
-    Json diff = Json::object();
-    diff["max_abs_dR_m"] = dz.leftCols(2).maxCoeff();
-    diff["max_abs_dtheta_rad"] = dz.col(2).maxCoeff();
-    diff["max_abs_dq"] = dz.rightCols(n).maxCoeff();
-    diff["max_rigid_difference"] = dz.leftCols(3).maxCoeff();
-    js["difference_nonlinear_minus_perturbation"] = diff;
+  if (r.nonlinear && r.perturbation && r.nonlinear->run.ok() && r.perturbation->run.ok()) {
+    const Eigen::MatrixXd dz = (r.nonlinear->run.z - r.perturbation->run.z).cwiseAbs();
+    SimulationStudyResult::Differences diff;
+    diff.max_abs_dR_m = dz.leftCols(2).maxCoeff();
+    diff.max_abs_dtheta_rad = dz.col(2).maxCoeff();
+    diff.max_abs_dq = dz.rightCols(n).maxCoeff();
+    diff.max_rigid_difference = dz.leftCols(3).maxCoeff();
+    r.difference_nonlinear_minus_perturbation = diff;
     if (log)
-      *log << "  max |full - perturbation|: R " << dz.leftCols(2).maxCoeff() << " m, theta " << dz.col(2).maxCoeff()
-           << " rad, q " << dz.rightCols(n).maxCoeff() << '\n';
+      *log << "  max |full - perturbation|: R " << diff.max_abs_dR_m << " m, theta " << diff.max_abs_dtheta_rad
+           << " rad, q " << diff.max_abs_dq << '\n';
   }
+  return r;
+}
+
+namespace detail {
+
+void write_simulation(const Design& design, const SimulationStudyResult& r, RunOutput& out) {
+  const SimulationStudy& st = *design.simulation;
+  const int n = design.noa;
+  const bool nl_ok = r.nonlinear && r.nonlinear->run.ok(), pt_ok = r.perturbation && r.perturbation->run.ok();
+  if (nl_ok) out.csv("nonlinear.csv", r.nonlinear->header, r.nonlinear->table);
+  if (pt_ok) out.csv("perturbation.csv", r.perturbation->header, r.perturbation->table);
 
   // Figures in the manner of the paper's Figs. 4-7: both solutions overlaid.
-  if (nl.ok || pt.ok) {
-    const Eigen::MatrixXd& any = nl.ok ? nl.z : pt.z;
+  if (nl_ok || pt_ok) {
+    const Eigen::MatrixXd& any = nl_ok ? r.nonlinear->run.z : r.perturbation->run.z;
     auto moves = [&](int c) {
       double m = any.col(c).cwiseAbs().maxCoeff();
-      if (nl.ok && pt.ok) m = std::max(m, pt.z.col(c).cwiseAbs().maxCoeff());
+      if (nl_ok && pt_ok) m = std::max(m, r.perturbation->run.z.col(c).cwiseAbs().maxCoeff());
       return m > 1e-9;
     };
     auto series = [&](int col, const std::string& what) {
       std::vector<PlotSeries> s;
-      if (nl.ok) s.push_back({"nonlinear.csv", 1, col, what + " full nonlinear", "lines"});
-      if (pt.ok) s.push_back({"perturbation.csv", 1, col, what + " perturbation", "lines dt 2"});
+      if (nl_ok) s.push_back({"nonlinear.csv", 1, col, what + " full nonlinear", "lines"});
+      if (pt_ok) s.push_back({"perturbation.csv", 1, col, what + " perturbation", "lines dt 2"});
       return s;
     };
     PlotSpec rigid{st.rigid_figure, "Rigid-body motion: " + design.title, {}};
@@ -195,8 +200,53 @@ int run_simulation(const Design& design, RunOutput& out, Json& summary, const Ma
       }
     if (!elastic.panels.empty()) out.plot(elastic, design.plots);
   }
-  summary["simulation"] = js;
-  return code;
 }
 
+namespace {
+Json run_stats(const SimulationStudyResult::Solution& s) {
+  const SimulationResult& r = s.run;
+  Json j = Json::object();
+  j["status"] = r.ok() ? "ok" : "failed";
+  if (!r.ok()) j["message"] = r.message;
+  j["rhs_evaluations"] = r.rhs_evaluations;
+  j["steps"] = r.steps;
+  j["wall_time_s"] = r.wall_time_s;
+  return j;
+}
+}  // namespace
+
+Json to_json(const SimulationStudyResult& r) {
+  Json js = Json::object();
+  js["loads_end_s"] = r.loads_end_s;
+  js["nominal"] = r.about_maneuver ? "optimized maneuver" : "zero-order simulation";
+  js["duration_s"] = r.duration_s;
+  if (r.nonlinear) {
+    Json j = run_stats(*r.nonlinear);
+    if (r.nonlinear->run.ok()) {
+      j["residual_vibration_energy_J"] = r.nonlinear->residual_vibration_energy_J;
+      j["energy_drift_rel"] = (*r.nonlinear->drifts)(0);
+      j["linear_momentum_drift_rel"] = (*r.nonlinear->drifts)(1);
+      j["angular_momentum_drift_rel"] = (*r.nonlinear->drifts)(2);
+    }
+    js["nonlinear"] = j;
+  }
+  if (r.perturbation) {
+    Json j = run_stats(*r.perturbation);
+    j["zero_order_rhs_evaluations"] = r.perturbation->zero_order_rhs_evaluations;
+    j["first_order_rhs_evaluations"] = r.perturbation->first_order_rhs_evaluations;
+    if (r.perturbation->run.ok()) j["residual_vibration_energy_J"] = r.perturbation->residual_vibration_energy_J;
+    js["perturbation"] = j;
+  }
+  if (const auto& d = r.difference_nonlinear_minus_perturbation) {
+    Json diff = Json::object();
+    diff["max_abs_dR_m"] = d->max_abs_dR_m;
+    diff["max_abs_dtheta_rad"] = d->max_abs_dtheta_rad;
+    diff["max_abs_dq"] = d->max_abs_dq;
+    diff["max_rigid_difference"] = d->max_rigid_difference;
+    js["difference_nonlinear_minus_perturbation"] = diff;
+  }
+  return js;
+}
+
+}  // namespace detail
 }  // namespace freeflex

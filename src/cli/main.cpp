@@ -1,13 +1,15 @@
-// freeflex command line: `freeflex modes DESIGN`, `freeflex run DESIGN --out DIR`.
-// Exit codes: 0 ok, 1 numerical failure, 2 bad input (nothing written), 3 write failure.
-#include <cstring>
+// freeflex command line: `freeflex modes DESIGN`, `freeflex run DESIGN --out DIR`, parsed
+// by CLI11. Results (the modes table, the closing lines) go to stdout; warnings and
+// errors to stderr. Exit codes: 0 ok, 1 numerical failure (its reason on stderr, also
+// with --quiet), 2 bad input (nothing written), 3 results could not be written.
+#include <CLI/CLI.hpp>
+
 #include <iomanip>
 #include <iostream>
-#include <optional>
 #include <string>
-#include <vector>
 
 #include "freeflex/app/run.hpp"
+#include "freeflex/io/output.hpp"
 #include "freeflex/model/basis.hpp"
 #include "freeflex/version.hpp"
 
@@ -15,64 +17,28 @@ namespace {
 
 using namespace freeflex;
 
-const char* kUsage =
-    "freeflex " FREEFLEX_VERSION " - controller-design workbench for free-free flexible beams\n"
-    "\n"
-    "usage:\n"
-    "  freeflex modes DESIGN [--noa N] [--format table|csv|json]\n"
-    "      elastic natural frequencies of the design's beam (ascending)\n"
-    "  freeflex run DESIGN --out DIR [--quiet]\n"
-    "      does what the design asks; writes results and summary.json into DIR\n"
-    "  freeflex --version | --help\n"
-    "\n"
-    "exit codes: 0 ok, 1 numerical failure, 2 bad input (nothing written), 3 cannot write results\n";
-
+/// A command line that names an option or a value freeflex refuses (exit 2).
 struct UsageError {
   std::string message;
 };
 
 struct Args {
-  std::string command, design, out, format = "table";
-  std::optional<int> noa;
+  std::string design, out, format = "table", noa_text;
+  int noa = 0;  ///< 0: the design's model.noa
   bool quiet = false;
 };
 
-Args parse_args(int argc, char** argv) {
-  Args a;
-  std::vector<std::string> pos;
-  for (int i = 1; i < argc; ++i) {
-    const std::string s = argv[i];
-    auto value = [&](const std::string& opt) -> std::string {
-      if (i + 1 >= argc) throw UsageError{opt + " needs a value"};
-      return argv[++i];
-    };
-    if (s == "--out") a.out = value(s);
-    else if (s == "--format") a.format = value(s);
-    else if (s == "--quiet") a.quiet = true;
-    else if (s == "--noa") {
-      const std::string v = value(s);
-      char* end = nullptr;
-      const long n = std::strtol(v.c_str(), &end, 10);
-      if (v.empty() || *end != '\0' || n < 1 || n > kMaxNoa)
-        throw UsageError{"--noa " + v + ": must be a whole number in [1, " + std::to_string(kMaxNoa) + "]"};
-      a.noa = static_cast<int>(n);
-    } else if (s.size() > 1 && s[0] == '-') throw UsageError{"unknown option '" + s + "'"};
-    else pos.push_back(s);
-  }
-  if (pos.empty()) throw UsageError{"a command is required (modes or run)"};
-  a.command = pos[0];
-  if (a.command != "modes" && a.command != "run") throw UsageError{"unknown command '" + a.command + "'"};
-  if (pos.size() != 2) throw UsageError{"'" + a.command + "' takes exactly one DESIGN file"};
-  a.design = pos[1];
-  if (a.format != "table" && a.format != "csv" && a.format != "json")
-    throw UsageError{"--format " + a.format + ": must be table, csv or json"};
-  if (a.command == "run" && a.out.empty()) throw UsageError{"run needs --out DIR"};
-  if (a.command == "modes" && !a.out.empty()) throw UsageError{"--out belongs to run, not modes"};
-  return a;
+/// --noa as a number of admissible functions; throws UsageError.
+int parse_noa(const std::string& text) {
+  char* end = nullptr;
+  const long n = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || *end != '\0' || n < 1 || n > kMaxNoa)
+    throw UsageError{"--noa " + text + ": must be a whole number in [1, " + std::to_string(kMaxNoa) + "]"};
+  return static_cast<int>(n);
 }
 
 int cmd_modes(const Args& a, const Design& d) {
-  const int noa = a.noa.value_or(d.noa);
+  const int noa = a.noa > 0 ? a.noa : d.noa;
   const ModeTable t = mode_table(d, noa);
   std::cout << std::setprecision(12);
   if (a.format == "csv") {
@@ -80,13 +46,14 @@ int cmd_modes(const Args& a, const Design& d) {
     for (int k = 0; k < t.lambda.size(); ++k)
       std::cout << k + 1 << ',' << t.omega_rad_s(k) << ',' << t.freq_hz(k) << ',' << t.lambda(k) << '\n';
   } else if (a.format == "json") {
-    Json j = Json::object();
+    auto array = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
+    nlohmann::ordered_json j;
     j["design"] = d.source;
     j["noa"] = noa;
-    j["omega_rad_s"] = Json::from(t.omega_rad_s);
-    j["freq_hz"] = Json::from(t.freq_hz);
-    j["lambda"] = Json::from(t.lambda);
-    std::cout << j.dump();
+    j["omega_rad_s"] = array(t.omega_rad_s);
+    j["freq_hz"] = array(t.freq_hz);
+    j["lambda"] = array(t.lambda);
+    std::cout << j.dump(2) << '\n';
   } else {
     std::cout << "elastic modes of '" << d.source << "', NOA = " << noa << "\n"
               << std::setw(5) << "mode" << std::setw(18) << "omega [rad/s]" << std::setw(16) << "freq [Hz]"
@@ -98,22 +65,50 @@ int cmd_modes(const Args& a, const Design& d) {
   return kExitOk;
 }
 
+int cmd_run(const Args& a, const Design& d) {
+  RunOptions opt;
+  opt.out_dir = a.out;
+  opt.quiet = a.quiet;
+  opt.log = &std::cout;
+  opt.errors = &std::cerr;
+  const RunResult r = run_design(d, opt);
+  if (!r.ok()) std::cerr << "freeflex: failed: " << r.message << '\n';
+  return r.exit_code();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc >= 2 && (std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0)) {
-    std::cout << kUsage;
-    return 0;
-  }
-  if (argc >= 2 && std::strcmp(argv[1], "--version") == 0) {
-    std::cout << "freeflex " << version() << " (" << dependency_versions() << ")\n";
-    return 0;
-  }
+  CLI::App app{"freeflex " FREEFLEX_VERSION " - controller-design workbench for free-free flexible beams", "freeflex"};
+  app.footer("exit codes: 0 ok, 1 numerical failure, 2 bad input (nothing written), 3 cannot write results");
+  app.set_version_flag("--version", "freeflex " + version() + " (" + dependency_versions() + ")");
+  app.require_subcommand(1);
   Args args;
+  CLI::App* modes = app.add_subcommand("modes", "elastic natural frequencies of the design's beam (ascending)");
+  modes->add_option("DESIGN", args.design, "design file (TOML)")->required();
+  modes->add_option("--noa", args.noa_text, "number of admissible functions, 1..100 (default: the design's model.noa)");
+  modes->add_option("--format", args.format, "table, csv or json")->check(CLI::IsMember({"table", "csv", "json"}));
+  CLI::App* run = app.add_subcommand("run", "does what the design asks; writes results and summary.json into DIR");
+  run->add_option("DESIGN", args.design, "design file (TOML)")->required();
+  run->add_option("--out", args.out, "output directory (created if needed)")->required();
+  run->add_flag("--quiet", args.quiet, "no progress or warnings; a failure's reason is still printed");
   try {
-    args = parse_args(argc, argv);
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::cout << app.help();
+    return kExitOk;
+  } catch (const CLI::CallForVersion& e) {
+    std::cout << e.what() << '\n';
+    return kExitOk;
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // help of a subcommand
+    std::cerr << "freeflex: " << e.what() << "\n(run 'freeflex --help' or 'freeflex COMMAND --help')\n";
+    return kExitBadInput;
+  }
+  try {
+    if (!args.noa_text.empty()) args.noa = parse_noa(args.noa_text);
   } catch (const UsageError& e) {
-    std::cerr << "freeflex: " << e.message << "\n\n" << kUsage;
+    std::cerr << "freeflex: " << e.message << '\n';
     return kExitBadInput;
   }
   Design design;
@@ -126,12 +121,7 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   }
   try {
-    if (args.command == "modes") return cmd_modes(args, design);
-    RunOptions opt;
-    opt.out_dir = args.out;
-    opt.quiet = args.quiet;
-    opt.log = &std::cout;
-    return run_design(design, opt);
+    return modes->parsed() ? cmd_modes(args, design) : cmd_run(args, design);
   } catch (const std::invalid_argument& e) {
     std::cerr << "freeflex: " << e.what() << '\n';
     return kExitBadInput;

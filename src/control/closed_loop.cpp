@@ -1,3 +1,5 @@
+// Closed-loop simulations of a TV-LQR law with saturation: on the first-order model it
+// was designed on and on the full nonlinear model.
 #include "freeflex/control/closed_loop.hpp"
 
 #include <algorithm>
@@ -8,6 +10,7 @@
 #include <stdexcept>
 
 #include "freeflex/dynamics/full_model.hpp"
+#include "model/commands.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
@@ -38,6 +41,24 @@ struct Window {
   double a = 0.0, b = 0.0;
   std::vector<double> outputs;
 };
+
+/// The first problem of `o` that does not depend on the model, or "".
+std::string options_problem(const ClosedLoopOptions& o) {
+  if (!std::isfinite(o.t_begin) || !std::isfinite(o.t_end)) return "t_begin and t_end must be finite";
+  if (!(o.output_step_s > 0.0) || !std::isfinite(o.output_step_s))
+    return "output_step_s = " + fmt(o.output_step_s) + ", must be finite and > 0";
+  for (int k = 0; k < o.limits.size(); ++k)
+    if (!(o.limits(k) > 0.0)) return "limits(" + std::to_string(k) + ") = " + fmt(o.limits(k)) + ", must be > 0";
+  if (!o.x1_initial.allFinite()) return "x1_initial has a non-finite entry";
+  for (double b : o.breakpoints)
+    if (!std::isfinite(b)) return "breakpoints must be finite";
+  try {
+    validate(o.integrator);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
 
 Window window(const TvlqrResult& law, const ClosedLoopOptions& o, const std::string& where) {
   Window w;
@@ -70,10 +91,8 @@ Law make_law(const FirstOrderModel& model, const TvlqrResult& law, const Actuato
   if (o.limits.size() != 0 && o.limits.size() != m)
     throw std::invalid_argument(where + ": expected " + std::to_string(m) + " actuator limits (or none), got " +
                                 std::to_string(o.limits.size()));
-  for (int k = 0; k < o.limits.size(); ++k)
-    if (!(o.limits(k) > 0.0))
-      throw std::invalid_argument(where + ": limits(" + std::to_string(k) + ") = " + fmt(o.limits(k)) +
-                                  ", must be > 0");
+  const std::string problem = options_problem(o);
+  if (!problem.empty()) throw std::invalid_argument(where + ": " + problem);
   if (o.x1_initial.size() != 0 && o.x1_initial.size() != nx)
     throw std::invalid_argument(where + ": expected x1_initial of size " + std::to_string(nx) + " (or empty), got " +
                                 std::to_string(o.x1_initial.size()));
@@ -97,8 +116,8 @@ std::vector<double> cuts_within(std::vector<double> b, double a, double e) {
 /// The integration's status and times, with room for the m commands at each output.
 ClosedLoopResult start_result(const IntegrationResult& ir, int m) {
   ClosedLoopResult r;
-  r.ok = ir.ok;
-  r.message = ir.ok ? "" : ir.message;
+  r.status = ir.status;
+  r.message = ir.ok() ? "" : ir.message;
   r.t = ir.t;
   r.commands.resize(ir.t.size(), m);
   r.demanded.resize(ir.t.size(), m);
@@ -132,6 +151,11 @@ void finish_result(ClosedLoopResult& r, const IntegrationResult& ir, const Eigen
 
 }  // namespace
 
+void validate(const ClosedLoopOptions& options) {
+  const std::string problem = options_problem(options);
+  if (!problem.empty()) throw std::invalid_argument("closed-loop options: " + problem);
+}
+
 CommandFunction nominal_element_commands(const Excitation& loads, const std::vector<int>& inputs,
                                          ActuatorCommandFunction u0) {
   const int ne = static_cast<int>(loads.profiles.size());
@@ -146,7 +170,7 @@ CommandFunction nominal_element_commands(const Excitation& loads, const std::vec
                                   " is an actuator and must not have a load profile");
   }
   return [loads, inputs, u0](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) {
-    loads.evaluate(at, c);
+    detail::evaluate_commands(loads, at, c);
     if (!u0) return;
     Eigen::VectorXd u(inputs.size());
     u.setZero();
@@ -165,18 +189,19 @@ ClosedLoopResult simulate_closed_loop_first_order(const FirstOrderModel& model, 
   const int N = model.body().dofs(), nx = 2 * N, m = L.m;
   const RigidTrajectory& nom = model.nominal();
 
+  FirstOrderModel::Data data = model.create_data();
   OdeSystem sys;
   sys.dim = nx;
   sys.rhs = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1, Eigen::Ref<Eigen::VectorXd> xd) {
     Eigen::VectorXd u0v, dem, app;
     L.evaluate(at, x1, u0v, dem, app);
-    model.rhs(at, x1, app - u0v, xd);
+    xd = model.rhs(data, at, x1, app - u0v);
     return xd.allFinite();
   };
   sys.jacobian = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1, Eigen::Ref<Eigen::MatrixXd> J) {
-    Eigen::MatrixXd A, B;
-    Eigen::VectorXd g, u0v, dem, app;
-    model.state_space(at, A, B, g);
+    const StateSpace& ss = model.state_space(data, at);
+    const Eigen::MatrixXd &A = ss.A, &B = ss.B;
+    Eigen::VectorXd u0v, dem, app;
     L.evaluate(at, x1, u0v, dem, app);
     Eigen::MatrixXd K = law.gain(at.t);
     for (int k = 0; k < m; ++k)
@@ -242,7 +267,7 @@ ClosedLoopResult simulate_closed_loop_full(const FirstOrderModel& model, const E
   auto commands = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::VectorXd& c,
                       Eigen::VectorXd& dem, Eigen::VectorXd& app) {
     c.resize(ne);
-    loads.evaluate(at, c);
+    detail::evaluate_commands(loads, at, c);
     Eigen::VectorXd u0v;
     L.evaluate(at, perturbation(at, x), u0v, dem, app);
     for (int k = 0; k < m; ++k) c(model.inputs()[k]) += app(k);
@@ -252,7 +277,9 @@ ClosedLoopResult simulate_closed_loop_full(const FirstOrderModel& model, const E
   sys.rhs = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xd) {
     Eigen::VectorXd c, dem, app;
     commands(at, x, c, dem, app);
-    return full.rhs(*data, x, c, xd);
+    if (!full.rhs(*data, x, c)) return false;
+    xd = data->x_dot;
+    return true;
   };
   sys.last_error = [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
 

@@ -1,13 +1,18 @@
+// Steady-state LQR: the CARE by the stable invariant subspace with Newton–Kleinman polish,
+// uncontrollable modes split off; weight checks and the vibration weight.
 #include "freeflex/control/lqr.hpp"
 
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <optional>
+#include <utility>
 #include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
 
+#include "control/lyapunov_solvers.hpp"
 #include "freeflex/control/lyapunov.hpp"
 #include "util/format.hpp"
 
@@ -213,27 +218,44 @@ Eigen::MatrixXd riccati_residual(const Eigen::MatrixXd& A, const Eigen::MatrixXd
 
 }  // namespace
 
-void check_positive_semidefinite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, const std::string& name,
-                                 const std::string& where) {
+namespace {
+/// The smallest eigenvalue of W's symmetric part and the largest magnitude, after the
+/// size check; none for an empty W.
+std::optional<std::pair<double, double>> eigenvalue_range(const Eigen::Ref<const Eigen::MatrixXd>& W, int n,
+                                                          const std::string& name, const std::string& where) {
   check_square(W, n, name, where);
-  if (n == 0) return;
+  if (n == 0) return std::nullopt;
   const Eigen::MatrixXd Ws = 0.5 * (W + W.transpose());
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Ws, Eigen::EigenvaluesOnly);
-  const double lo = es.eigenvalues()(0), hi = es.eigenvalues().cwiseAbs().maxCoeff();
-  if (lo < -1e-10 * hi)
+  return std::make_pair(es.eigenvalues()(0), es.eigenvalues().cwiseAbs().maxCoeff());
+}
+}  // namespace
+
+void check_positive_semidefinite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, const std::string& name,
+                                 const std::string& where) {
+  const auto range = eigenvalue_range(W, n, name, where);
+  if (range && range->first < -1e-10 * range->second)
     throw std::invalid_argument(where + ": " + name + " must be positive semidefinite: smallest eigenvalue " +
-                                fmt(lo));
+                                fmt(range->first));
 }
 
 void check_positive_definite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, const std::string& name,
                              const std::string& where) {
-  check_square(W, n, name, where);
-  if (n == 0) return;
-  const Eigen::MatrixXd Ws = 0.5 * (W + W.transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Ws, Eigen::EigenvaluesOnly);
-  const double lo = es.eigenvalues()(0), hi = es.eigenvalues().cwiseAbs().maxCoeff();
-  if (!(lo > 1e-14 * hi) || !(lo > 0.0))
-    throw std::invalid_argument(where + ": " + name + " must be positive definite: smallest eigenvalue " + fmt(lo));
+  const auto range = eigenvalue_range(W, n, name, where);
+  if (range && (!(range->first > 1e-14 * range->second) || !(range->first > 0.0)))
+    throw std::invalid_argument(where + ": " + name + " must be positive definite: smallest eigenvalue " +
+                                fmt(range->first));
+}
+
+namespace {
+bool care_options_valid(const CareOptions& opt) {
+  return opt.controllability_tolerance > 0.0 && opt.imaginary_axis_tolerance > 0.0 && opt.max_newton_iterations >= 0;
+}
+}  // namespace
+
+void validate(const CareOptions& opt) {
+  if (!care_options_valid(opt))
+    throw std::invalid_argument("CARE options: tolerances must be > 0 and max_newton_iterations >= 0");
 }
 
 CareResult solve_care(const Eigen::Ref<const Eigen::MatrixXd>& A_in, const Eigen::Ref<const Eigen::MatrixXd>& B_in,
@@ -251,8 +273,7 @@ CareResult solve_care(const Eigen::Ref<const Eigen::MatrixXd>& A_in, const Eigen
   if (!B_in.allFinite()) throw std::invalid_argument(where + ": B has a non-finite entry");
   check_positive_semidefinite(Q_in, n, "Q", where);
   check_positive_definite(R_in, m, "R", where);
-  if (!(opt.controllability_tolerance > 0.0) || !(opt.imaginary_axis_tolerance > 0.0) ||
-      opt.max_newton_iterations < 0)
+  if (!care_options_valid(opt))
     throw std::invalid_argument(where + ": tolerances must be > 0 and max_newton_iterations >= 0");
 
   const Eigen::MatrixXd A = A_in, B = B_in;

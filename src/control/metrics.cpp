@@ -1,3 +1,5 @@
+// Figures of merit of a response: residual and mean vibration energy, tip deflection and
+// its settling, final rigid errors, control effort.
 #include "freeflex/control/metrics.hpp"
 
 #include <algorithm>

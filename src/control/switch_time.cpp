@@ -1,144 +1,30 @@
-// Bang-bang switch-time design with NLopt SLSQP (see the header for the formulation).
+// Bang-bang switch-time design with NLopt SLSQP and Newton's method (see the header for
+// the formulation): the closed-form stage, the first-order stage, and the options.
 #include "freeflex/control/switch_time.hpp"
 
 #include <nlopt.hpp>
 
 #include <algorithm>
 #include <chrono>
-#include <functional>
 #include <cmath>
 #include <complex>
 #include <random>
-#include <sstream>
 #include <stdexcept>
 
-#include "freeflex/dynamics/first_order.hpp"
-#include "freeflex/sim/integrator.hpp"
-#include "util/format.hpp"
+#include "control/switch_time_model.hpp"
 
 namespace freeflex {
 namespace {
 
-std::string fmt(double v) { return util::format_number(v, 10); }
+using namespace detail;
+std::string fmt(double v) { return fmt10(v); }
 
-void validate_actuator(const FlexibleBody& body, int actuator, const std::string& where) {
-  const int ne = static_cast<int>(body.elements().size());
-  if (actuator < 0 || actuator >= ne)
-    throw std::invalid_argument(where + ": actuator = " + std::to_string(actuator) + " is not an element of the body (0.." +
-                                std::to_string(ne - 1) + ")");
-  const ForceElement& el = body.elements()[actuator];
-  if (el.type != ForceElement::Type::Torque)
-    throw std::invalid_argument(where + ": actuator " + std::to_string(actuator) + " ('" + el.name +
-                                "') must be a torque, got a force or thruster");
-  const double L = body.beam().length();
-  if (std::abs(body.element_x(actuator)) > 1e-9 * L)
-    throw std::invalid_argument(where + ": actuator '" + el.name + "' must act at o (x = 0), got x = " +
-                                fmt(body.element_x(actuator)) + " m");
-  const ModalIntegrals& mi = body.integrals();
-  if (std::abs(mi.S_o) > 1e-9 * mi.m * L)
-    throw std::invalid_argument(where + ": o must be the mass centre (S_o = 0), got S_o = " + fmt(mi.S_o) + " kg m");
+/// The first problem of `o`, or "".
+std::string options_problem(const SwitchTimeOptions& o) {
+  if (!(o.rtol > 0.0) || !(o.atol > 0.0) || !(o.constraint_tolerance > 0.0) || o.starts < 1 || o.max_evaluations < 1)
+    return "rtol, atol, constraint_tolerance must be > 0 and starts, max_evaluations >= 1";
+  return "";
 }
-
-/// The first `modes` elastic modes of the rest model (eq. 4.1, at attitude theta) that the
-/// torque excites: frequencies, mass-normalized shapes, participation vᵀ g.
-struct TargetModes {
-  Eigen::VectorXd omega, participation;
-  Eigen::MatrixXd shapes;  // N x k
-  Eigen::MatrixXd M0;      // 𝕄0 at theta
-};
-
-TargetModes target_modes(const FlexibleBody& body, int actuator, double theta, int modes, const std::string& where) {
-  const int N = body.dofs();
-  ExcitedModes em = excited_modes(body, actuator, theta);
-  if (static_cast<int>(em.excited.size()) < modes)
-    throw std::invalid_argument(where + ": the actuator excites only " + std::to_string(em.excited.size()) +
-                                " elastic modes of this basis, asked for modes = " + std::to_string(modes));
-  TargetModes t;
-  t.omega.resize(modes);
-  t.participation.resize(modes);
-  t.shapes.resize(N, modes);
-  for (int i = 0; i < modes; ++i) {
-    const int j = em.excited[static_cast<std::size_t>(i)];
-    t.omega(i) = std::sqrt(std::max(0.0, em.eigenvalues(3 + j)));
-    t.participation(i) = em.participation(j);
-    t.shapes.col(i) = em.eigenvectors.col(3 + j);
-  }
-  t.M0 = std::move(em.M0);
-  return t;
-}
-
-}  // namespace
-
-ExcitedModes excited_modes(const FlexibleBody& body, int element, double theta) {
-  const int N = body.dofs(), n = body.n();
-  ExcitedModes m;
-  m.M0.resize(N, N);
-  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
-  body.mass_matrix(theta, q0, m.M0);
-  Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(N, N);
-  K0.bottomRightCorner(n, n) = body.integrals().K;
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K0, m.M0);
-  m.eigenvalues = es.eigenvalues();
-  m.eigenvectors = es.eigenvectors();
-  Eigen::VectorXd g(N);
-  body.element_force(element, theta, q0, g);
-  m.participation = m.eigenvectors.rightCols(n).transpose() * g;
-  const double pmax = m.participation.cwiseAbs().maxCoeff();
-  for (int j = 0; j < n; ++j)
-    if (std::abs(m.participation(j)) > 1e-8 * pmax) m.excited.push_back(j);
-  return m;
-}
-
-namespace {
-
-std::vector<double> switches_of(const std::vector<double>& durations, double& T) {
-  std::vector<double> s;
-  double t = 0.0;
-  for (std::size_t i = 0; i + 1 < durations.size(); ++i) {
-    t += durations[i];
-    s.push_back(t);
-  }
-  T = t + durations.back();
-  return s;
-}
-
-/// Rigid end state θ0(T), θ0'(T) of durations Δ (signs +, −, ...) and their gradients.
-void rigid_end(const std::vector<double>& D, double a, double& theta, double& rate, std::vector<double>* dtheta,
-               std::vector<double>* drate) {
-  const int M = static_cast<int>(D.size());
-  theta = 0.0;
-  rate = 0.0;
-  std::vector<double> rate_after(M);
-  for (int i = 0; i < M; ++i) {
-    const double acc = (i % 2 == 0 ? a : -a);
-    theta += rate * D[i] + 0.5 * acc * D[i] * D[i];
-    rate += acc * D[i];
-    rate_after[i] = rate;
-  }
-  if (dtheta) {
-    dtheta->assign(M, 0.0);
-    drate->assign(M, 0.0);
-    double after = 0.0;  // time after interval i
-    for (int i = M - 1; i >= 0; --i) {
-      const double acc = (i % 2 == 0 ? a : -a);
-      (*dtheta)[i] = rate_after[i] + acc * after;  // more time at acceleration acc, inserted
-      (*drate)[i] = acc;
-      after += D[i];
-    }
-  }
-}
-
-struct Problem {
-  const FlexibleBody* body = nullptr;
-  int actuator = 0, k = 0;
-  double I_o = 0.0, tau = 0.0, a = 0.0, dtheta = 0.0;
-  double scale = 1.0;  // sqrt(I_o) θ'* : modal constraints divided by it
-  TargetModes modes;
-  double rtol = 1e-11, atol = 1e-14;
-  int simulations = 0;
-  std::function<void(int)> progress;  // SwitchTimeOptions::progress
-  std::string last_error;
-};
 
 /// Stage-1 modal constraints (closed form) and gradients (rows of 2 per mode).
 void modal_closed_form(const Problem& P, const std::vector<double>& D, double* c, double* grad) {
@@ -170,64 +56,6 @@ void modal_closed_form(const Problem& P, const std::vector<double>& D, double* c
         grad[(2 * j + 1) * M + l] = amp * g.imag();
       }
     }
-  }
-}
-
-/// First-order simulation of a design: x1(T).
-bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end, double* peak_rate = nullptr) {
-  double T = 0.0;
-  const std::vector<double> sw = switches_of(D, T);
-  ++P.simulations;
-  if (P.progress) P.progress(P.simulations);
-  try {
-    const BangBangRotation traj(P.I_o, P.tau, sw, T);
-    const int act = P.actuator;
-    const FirstOrderModel model(
-        *P.body, traj,
-        [&traj, act](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) {
-          c.setZero();
-          c(act) = traj.torque(at);
-        },
-        {});
-    const int N = P.body->dofs();
-    OdeSystem sys;
-    sys.dim = 2 * N;
-    const Eigen::VectorXd none(0);
-    sys.rhs = [&model, &none](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
-                              Eigen::Ref<Eigen::VectorXd> xd) {
-      model.rhs(at, x, none, xd);
-      return xd.allFinite();
-    };
-    IntegratorOptions io;
-    io.method = IntegratorOptions::Method::Adams;  // undamped oscillations, not stiff
-    io.rtol = P.rtol;
-    io.atol = P.atol;
-    const IntegrationResult ir = integrate(sys, Eigen::VectorXd::Zero(2 * N), {0.0, T}, sw, io);
-    if (!ir.ok) {
-      P.last_error = ir.message;
-      return false;
-    }
-    x1_end = ir.x.row(ir.x.rows() - 1).transpose();
-    if (peak_rate) {
-      double pk = 0.0;
-      for (double s : sw) pk = std::max(pk, std::abs(traj.at(Instant::at(s)).vel(2)));
-      *peak_rate = pk;
-    }
-    return true;
-  } catch (const std::exception& e) {
-    P.last_error = e.what();
-    return false;
-  }
-}
-
-/// Modal constraints [ω η, η'] / scale of the first-order state at T.
-void modal_from_state(const Problem& P, const Eigen::VectorXd& x1, double* c) {
-  const int N = P.body->dofs();
-  const Eigen::VectorXd eta = P.modes.shapes.transpose() * (P.modes.M0 * x1.head(N));
-  const Eigen::VectorXd eta_d = P.modes.shapes.transpose() * (P.modes.M0 * x1.tail(N));
-  for (int j = 0; j < P.k; ++j) {
-    c[2 * j] = P.modes.omega(j) * eta(j) / P.scale;
-    c[2 * j + 1] = eta_d(j) / P.scale;
   }
 }
 
@@ -383,135 +211,37 @@ StageResult newton_first_order(Problem& P, const std::vector<double>& start, dou
 
 }  // namespace
 
-BangBangRotation::BangBangRotation(double I_o, double torque_limit_Nm, std::vector<double> switch_times,
-                                   double duration_s)
-    : tau_max_(torque_limit_Nm), accel_(torque_limit_Nm / I_o), duration_(duration_s) {
-  if (!(I_o > 0.0) || !(torque_limit_Nm > 0.0) || !std::isfinite(I_o) || !std::isfinite(torque_limit_Nm))
-    throw std::invalid_argument("bang-bang rotation: I_o and the torque limit must be finite and > 0");
-  t_.push_back(0.0);
-  for (double s : switch_times) {  // equal times: an interval of zero length
-    if (!(s >= t_.back()) || !(s <= duration_s))
-      throw std::invalid_argument("bang-bang rotation: switch times must ascend inside [0, " + fmt(duration_s) +
-                                  "], got " + fmt(s));
-    t_.push_back(s);
-  }
-  if (!(duration_s > 0.0) || !(duration_s >= t_.back()) || !std::isfinite(duration_s))
-    throw std::invalid_argument("bang-bang rotation: the duration must follow the last switch, got " + fmt(duration_s));
-  t_.push_back(duration_s);
-  theta_.assign(t_.size(), 0.0);
-  rate_.assign(t_.size(), 0.0);
-  for (std::size_t i = 0; i + 1 < t_.size(); ++i) {
-    const double acc = (i % 2 == 0 ? accel_ : -accel_), h = t_[i + 1] - t_[i];
-    theta_[i + 1] = theta_[i] + rate_[i] * h + 0.5 * acc * h * h;
-    rate_[i + 1] = rate_[i] + acc * h;
-  }
+void validate(const SwitchTimeOptions& o) {
+  const std::string problem = options_problem(o);
+  if (!problem.empty()) throw std::invalid_argument("switch-time options: " + problem);
 }
 
-int BangBangRotation::piece(double mid) const {
-  const int M = static_cast<int>(t_.size()) - 1;  // intervals; index M: after the end
-  if (mid >= duration_) return M;
-  int p = 0;
-  while (p + 1 < M && mid >= t_[p + 1]) ++p;  // zero-length intervals are skipped
-  return p;
-}
-
-RigidState BangBangRotation::at(const Instant& when) const {
-  const int p = piece(when.piece_mid);
-  RigidState s;
-  const int M = static_cast<int>(t_.size()) - 1;
-  const double acc = p == M ? 0.0 : (p % 2 == 0 ? accel_ : -accel_);
-  const double dt = when.t - t_[p];
-  s.pos(2) = theta_[p] + rate_[p] * dt + 0.5 * acc * dt * dt;
-  s.vel(2) = rate_[p] + acc * dt;
-  s.acc(2) = acc;
-  return s;
-}
-
-std::vector<double> BangBangRotation::breakpoints() const { return std::vector<double>(t_.begin() + 1, t_.end()); }
-
-double BangBangRotation::torque(const Instant& when) const {
-  const int p = piece(when.piece_mid);
-  const int M = static_cast<int>(t_.size()) - 1;
-  return p == M ? 0.0 : (p % 2 == 0 ? tau_max_ : -tau_max_);
-}
-
-TimeProfile BangBangRotation::profile() const {
-  std::vector<double> v;
-  for (std::size_t i = 0; i + 1 < t_.size(); ++i) v.push_back(i % 2 == 0 ? tau_max_ : -tau_max_);
-  return TimeProfile(TimeProfile::Kind::Steps, t_, v);
-}
-
-TimeProfile SwitchTimeResult::torque_profile() const {
-  std::vector<double> t{0.0};
-  t.insert(t.end(), switch_times.begin(), switch_times.end());
-  t.push_back(duration_s);
-  std::vector<double> v;
-  for (std::size_t i = 0; i + 1 < t.size(); ++i) v.push_back(i % 2 == 0 ? torque_limit_Nm : -torque_limit_Nm);
-  return TimeProfile(TimeProfile::Kind::Steps, t, v);
-}
-
-BangBangResidual bang_bang_residual(const FlexibleBody& body, int actuator, double torque_limit_Nm,
-                                    const std::vector<double>& switch_times, double duration_s, int modes, double rtol,
-                                    double atol) {
-  const std::string where = "bang_bang_residual";
-  validate_actuator(body, actuator, where);
-  if (modes < 0) throw std::invalid_argument(where + ": modes must be >= 0");
-  const BangBangRotation traj(body.integrals().I_o, torque_limit_Nm, switch_times, duration_s);
-  Problem P;
-  P.body = &body;
-  P.actuator = actuator;
-  P.I_o = body.integrals().I_o;
-  P.tau = torque_limit_Nm;
-  P.a = torque_limit_Nm / P.I_o;
-  P.rtol = rtol;
-  P.atol = atol;
-  P.k = modes;
-  const double theta_f = traj.at(Instant{duration_s, duration_s + 1.0}).pos(2);
-  P.modes = target_modes(body, actuator, theta_f, modes, where);
-  std::vector<double> D;
-  double prev = 0.0;
-  for (double s : switch_times) D.push_back(s - prev), prev = s;
-  D.push_back(duration_s - prev);
-  BangBangResidual r;
-  r.omega_rad_s = P.modes.omega;
-  if (!simulate(P, D, r.x1_end, &r.peak_rate_rad_s)) {
-    r.message = P.last_error;
-    return r;
-  }
-  const int N = body.dofs();
-  const Eigen::VectorXd eta = P.modes.shapes.transpose() * (P.modes.M0 * r.x1_end.head(N));
-  const Eigen::VectorXd eta_d = P.modes.shapes.transpose() * (P.modes.M0 * r.x1_end.tail(N));
-  r.energy_J = 0.5 * (eta_d.cwiseAbs2() + P.modes.omega.cwiseAbs2().cwiseProduct(eta.cwiseAbs2()));
-  r.rigid_kinetic_peak_J = 0.5 * P.I_o * r.peak_rate_rad_s * r.peak_rate_rad_s;
-  r.ok = true;
-  return r;
-}
-
-SwitchTimeResult design_switch_times(const FlexibleBody& body, const SwitchTimeOptions& o) {
+SwitchTimeResult design_switch_times(const FlexibleBody& body, int actuator, double rotation_rad,
+                                     double torque_limit_Nm, int modes, const SwitchTimeOptions& o) {
   const std::string where = "design_switch_times";
-  validate_actuator(body, o.actuator, where);
-  if (!(o.rotation_rad > 0.0) || !std::isfinite(o.rotation_rad))
-    throw std::invalid_argument(where + ": rotation_rad = " + fmt(o.rotation_rad) + ", must be finite and > 0");
-  if (!(o.torque_limit_Nm > 0.0) || !std::isfinite(o.torque_limit_Nm))
-    throw std::invalid_argument(where + ": torque_limit_Nm = " + fmt(o.torque_limit_Nm) + ", must be finite and > 0");
-  if (o.modes < 0 || o.modes > 4)
-    throw std::invalid_argument(where + ": modes = " + std::to_string(o.modes) + ", must be in [0, 4]");
-  if (!(o.rtol > 0.0) || !(o.atol > 0.0) || !(o.constraint_tolerance > 0.0) || o.starts < 1 || o.max_evaluations < 1)
-    throw std::invalid_argument(where + ": rtol, atol, constraint_tolerance must be > 0 and starts, max_evaluations >= 1");
+  validate_actuator(body, actuator, where);
+  if (!(rotation_rad > 0.0) || !std::isfinite(rotation_rad))
+    throw std::invalid_argument(where + ": rotation_rad = " + fmt(rotation_rad) + ", must be finite and > 0");
+  if (!(torque_limit_Nm > 0.0) || !std::isfinite(torque_limit_Nm))
+    throw std::invalid_argument(where + ": torque_limit_Nm = " + fmt(torque_limit_Nm) + ", must be finite and > 0");
+  if (modes < 0 || modes > 4)
+    throw std::invalid_argument(where + ": modes = " + std::to_string(modes) + ", must be in [0, 4]");
+  const std::string problem = options_problem(o);
+  if (!problem.empty()) throw std::invalid_argument(where + ": " + problem);
   const auto clock0 = std::chrono::steady_clock::now();
 
   Problem P;
   P.body = &body;
-  P.actuator = o.actuator;
-  P.k = o.modes;
+  P.actuator = actuator;
+  P.k = modes;
   P.I_o = body.integrals().I_o;
-  P.tau = o.torque_limit_Nm;
+  P.tau = torque_limit_Nm;
   P.a = P.tau / P.I_o;
-  P.dtheta = o.rotation_rad;
+  P.dtheta = rotation_rad;
   P.rtol = o.rtol;
   P.atol = o.atol;
   P.progress = o.progress;
-  P.modes = target_modes(body, o.actuator, o.rotation_rad, o.modes, where);
+  P.modes = target_modes(body, actuator, rotation_rad, modes, where);
   const double Tstar = 2.0 * std::sqrt(P.I_o * P.dtheta / P.tau);
   P.scale = std::sqrt(P.I_o) * P.a * Tstar / 2.0;  // sqrt(I_o) θ'* (rigid peak rate)
 
@@ -604,23 +334,6 @@ SwitchTimeResult design_switch_times(const FlexibleBody& body, const SwitchTimeO
   (void)M;
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
   return res;
-}
-
-InputShaper zv_shaper(double omega, double zeta) {
-  if (!(omega > 0.0) || !(zeta >= 0.0) || !(zeta < 1.0))
-    throw std::invalid_argument("zv_shaper: need omega > 0 and 0 <= zeta < 1");
-  const double K = std::exp(-zeta * M_PI / std::sqrt(1.0 - zeta * zeta));
-  const double Td = 2.0 * M_PI / (omega * std::sqrt(1.0 - zeta * zeta));
-  return {{0.0, 0.5 * Td}, {1.0 / (1.0 + K), K / (1.0 + K)}};
-}
-
-InputShaper zvd_shaper(double omega, double zeta) {
-  if (!(omega > 0.0) || !(zeta >= 0.0) || !(zeta < 1.0))
-    throw std::invalid_argument("zvd_shaper: need omega > 0 and 0 <= zeta < 1");
-  const double K = std::exp(-zeta * M_PI / std::sqrt(1.0 - zeta * zeta));
-  const double Td = 2.0 * M_PI / (omega * std::sqrt(1.0 - zeta * zeta));
-  const double s = 1.0 + 2.0 * K + K * K;
-  return {{0.0, 0.5 * Td, Td}, {1.0 / s, 2.0 * K / s, K * K / s}};
 }
 
 }  // namespace freeflex

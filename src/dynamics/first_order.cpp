@@ -1,9 +1,12 @@
+// The first-order (LTV) model about a rigid trajectory (eq. 7.1-7.3): implicit form,
+// state-space matrices and the term-by-term right-hand side.
 #include "freeflex/dynamics/first_order.hpp"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
+#include "dynamics/body_kernels.hpp"
 #include "planar.hpp"
 
 namespace freeflex {
@@ -45,14 +48,16 @@ FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory
     if (i < 0 || i >= ne)
       throw std::invalid_argument("first-order model: input index " + std::to_string(i) + " is not an element (0.." +
                                   std::to_string(ne - 1) + ")");
-  Eigen::MatrixXd M0(body_.dofs(), body_.dofs());
-  body_.mass_matrix(0.0, Eigen::VectorXd::Zero(body_.n()), M0);
+  const Eigen::MatrixXd M0 = body_.mass_matrix(0.0, Eigen::VectorXd::Zero(body_.n()));
   // symmetric positive definite and well conditioned (the basis is orthogonal in M): its
   // inverse, formed once, makes every solve one matrix-vector product
   rest_inverse_ = M0.llt().solve(Eigen::MatrixXd::Identity(body_.dofs(), body_.dofs()));
 }
 
-void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
+FirstOrderModel::Data FirstOrderModel::create_data() const { return Data{}; }
+
+FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) const {
+  Implicit o;
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n(), N = body_.dofs();
   const Frame fr = frame_at(nominal_, at, mi.S_o);
@@ -62,12 +67,11 @@ void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
 
   Eigen::VectorXd u0(body_.elements().size());
   commands_(at, u0);
-  Eigen::VectorXd G(N);
-  Eigen::MatrixXd dG;
-  body_.generalized_force(th, q0, u0, G, &dG);
+  const FlexibleBody::ForceDerivative force = body_.generalized_force_derivative(th, q0, u0);
+  const Eigen::VectorXd& G = force.value;
+  const Eigen::MatrixXd& dG = force.derivative;
 
-  o.M0.resize(N, N);
-  body_.mass_matrix(th, q0, o.M0);
+  o.M0 = body_.mass_matrix(th, q0);
 
   // ∂(residual)/∂z at the nominal motion (eq. 7.1); columns Rx, Ry do not appear.
   Eigen::MatrixXd Kr = Eigen::MatrixXd::Zero(N, N);
@@ -88,25 +92,23 @@ void FirstOrderModel::implicit_form(const Instant& at, Implicit& o) const {
   o.Kt = -Kr;
   o.Ct = -Cr;
   o.Gu.resize(N, input_size());
-  Eigen::VectorXd g(N);
-  for (int k = 0; k < input_size(); ++k) {
-    body_.element_force(inputs_[k], th, q0, g);
-    o.Gu.col(k) = g;
-  }
+  for (int k = 0; k < input_size(); ++k) o.Gu.col(k) = body_.element_force(inputs_[k], th, q0);
   // r0 = G - 𝕄0 z0'' - h(z0, z0'): its q rows are the forcing of the vibration; its rigid
   // rows vanish when the trajectory satisfies eq. 6.3 exactly.
   Eigen::VectorXd zdd0 = Eigen::VectorXd::Zero(N);
   zdd0.head<3>() = fr.acc;
   o.r0 = G - o.M0 * zdd0;
   o.r0.head<2>() += thd * thd * fr.Cs0;
+  return o;
 }
 
-void FirstOrderModel::state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::MatrixXd& B,
-                                  Eigen::VectorXd& g) const {
+const StateSpace& FirstOrderModel::state_space(Data& data, const Instant& at) const {
   const int N = body_.dofs();
-  Implicit o;
-  implicit_form(at, o);
+  const Implicit o = implicit_form(at);
   const Eigen::LLT<Eigen::MatrixXd> llt(o.M0);
+  Eigen::MatrixXd& A = data.state_space.A;
+  Eigen::MatrixXd& B = data.state_space.B;
+  Eigen::VectorXd& g = data.state_space.g;
   A.setZero(2 * N, 2 * N);
   A.topRightCorner(N, N).setIdentity();
   A.bottomLeftCorner(N, N) = llt.solve(o.Kt);
@@ -115,22 +117,18 @@ void FirstOrderModel::state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::
   B.bottomRows(N) = llt.solve(o.Gu);
   g.setZero(2 * N);
   g.tail(N) = llt.solve(o.r0);
+  return data.state_space;
 }
 
-namespace {
-/// Work vectors of FirstOrderModel::rhs, one set per thread: after the first call the
-/// right-hand side allocates nothing (it runs ~10⁴ times per simulated second).
-struct RhsScratch {
-  Eigen::VectorXd q, q0, u0, f, dG;
-};
-RhsScratch& rhs_scratch() {
-  thread_local RhsScratch s;
-  return s;
+StateSpace FirstOrderModel::state_space(const Instant& at) const {
+  Data data = create_data();
+  return state_space(data, at);
 }
-}  // namespace
 
-void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
-                          const Eigen::Ref<const Eigen::VectorXd>& u1, Eigen::Ref<Eigen::VectorXd> x1_dot) const {
+const Eigen::VectorXd& FirstOrderModel::rhs(Data& w, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
+                                            const Eigen::Ref<const Eigen::VectorXd>& u1) const {
+  // After the first call with a workspace the right-hand side allocates nothing (it runs
+  // ~10⁴ times per simulated second).
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n(), N = body_.dofs();
   const Frame fr = frame_at(nominal_, at, mi.S_o);
@@ -139,7 +137,6 @@ void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::Vecto
   const Eigen::Matrix2d& C = fr.C;
   const Eigen::Vector2d &Ce1 = fr.Ce1, &Ce2 = fr.Ce2, &CJe2 = fr.CJe2, &Cs0 = fr.Cs0, &CJs0 = fr.CJs0;
   const double th1 = x1(2), th1d = x1(N + 2);
-  RhsScratch& w = rhs_scratch();
   w.q = x1.segment(3, n);
   const auto qd = x1.tail(n);
   const double Pq = mi.Phi_bar.dot(w.q), Pqd = mi.Phi_bar.dot(qd);
@@ -152,9 +149,9 @@ void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::Vecto
   Eigen::VectorXd& f = w.f;
   commands_(at, w.u0);
   for (int e = 0; e < w.u0.size(); ++e)
-    if (w.u0(e) != 0.0) body_.add_element_force(e, th, w.q0, w.u0(e), f, th1, &w.q, &w.dG);
-  for (int k = 0; k < input_size(); ++k)
-    if (u1(k) != 0.0) body_.add_element_force(inputs_[k], th, w.q0, u1(k), f);
+    if (w.u0(e) != 0.0) detail::add_element_force(body_, e, th, w.q0, w.u0(e), f, th1, &w.q, &w.dG);
+  for (int k = 0; k < u1.size(); ++k)
+    if (u1(k) != 0.0) detail::add_element_force(body_, inputs_[k], th, w.q0, u1(k), f);
   f += w.dG;
   // r0 - Kr δz - Cr δz' (eq. 7.1), row block by row block
   f.head<2>() += thd * thd * Cs0 - (mi.m * Rdd + thdd * CJs0)                     // r0
@@ -169,11 +166,14 @@ void FirstOrderModel::rhs(const Instant& at, const Eigen::Ref<const Eigen::Vecto
   if (body_.damped()) f.noalias() -= body_.damping() * x1.tail(N);
   // 𝕄0(θ0)⁻¹ f = T 𝕄0(0)⁻¹ Tᵀ f
   f.head<2>() = C.transpose() * f.head<2>();
+  Eigen::VectorXd& x1_dot = w.x1_dot;
+  x1_dot.resize(2 * N);
   x1_dot.head(N) = x1.tail(N);
   auto z1dd = x1_dot.tail(N);
   z1dd.noalias() = rest_inverse_.lazyProduct(f);  // coefficient-wise: cheaper at these sizes
   const Eigen::Vector2d a = z1dd.head<2>();
   z1dd.head<2>() = C * a;
+  return x1_dot;
 }
 
 }  // namespace freeflex

@@ -1,9 +1,12 @@
+// The discretized flexible body: mass matrix, generalized forces of the force elements
+// and their derivatives, modal damping, vibration energy.
 #include "freeflex/dynamics/flexible_body.hpp"
 
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
+#include "dynamics/body_kernels.hpp"
 #include "planar.hpp"
 
 namespace freeflex {
@@ -46,8 +49,7 @@ FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> 
   }
   const int n = basis_.size(), N = 3 + n;
   // Schur complement of the rigid block of the rest mass matrix (eq. 6.8).
-  Eigen::MatrixXd M0(N, N);
-  mass_matrix(0.0, Eigen::VectorXd::Zero(n), M0);
+  const Eigen::MatrixXd M0 = mass_matrix(0.0, Eigen::VectorXd::Zero(n));
   M_condensed_ = mi_.M - M0.block(3, 0, n, 3) * M0.topLeftCorner<3, 3>().ldlt().solve(M0.block(0, 3, 3, n));
   D_.setZero(N, N);
   for (double z : damping_ratios)
@@ -73,12 +75,11 @@ int FlexibleBody::element_index(const std::string& name) const {
   return -1;
 }
 
-void FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
-                               Eigen::Ref<Eigen::MatrixXd> out) const {
+Eigen::MatrixXd FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const {
   const int n = this->n();
   const Eigen::Matrix2d C = rot(theta);
   const Eigen::Vector2d s(mi_.S_o, mi_.Phi_bar.dot(q));  // s(q) = ∫p dm, eq. 3.3
-  out.setZero();
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(dofs(), dofs());
   out(0, 0) = out(1, 1) = mi_.m;
   const Eigen::Vector2d MRth = C * kJ * s;                 // C J s
   const Eigen::Vector2d Ce2 = C.col(1);                    // C e2
@@ -92,14 +93,19 @@ void FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const Eigen::Vecto
   out.block(2, 3, 1, n) = mi_.Phi_tilde;
   out.block(3, 2, n, 1) = mi_.Phi_tilde.transpose();
   out.bottomRightCorner(n, n) = mi_.M;
+  return out;
 }
 
-void FlexibleBody::element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
-                                 Eigen::Ref<Eigen::VectorXd> g, Eigen::MatrixXd* d) const {
-  const int n = this->n();
-  const ForceElement& el = elements_[e];
-  const Eigen::RowVectorXd& phi = phi_[e];
-  const Eigen::RowVectorXd& dphi = dphi_[e];
+namespace {
+
+/// Generalized force of element e per unit command at (theta, q) into g and, if d is
+/// given, its derivative with respect to (theta, q) into d (eq. 6.4).
+void element_force_into(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        Eigen::Ref<Eigen::VectorXd> g, Eigen::MatrixXd* d) {
+  const int n = body.n();
+  const ForceElement& el = body.elements()[e];
+  const Eigen::RowVectorXd& phi = body.element_phi(e);
+  const Eigen::RowVectorXd& dphi = body.element_slope(e);
   g.setZero();
   if (d) d->setZero(3 + n, 1 + n);
   if (el.type == ForceElement::Type::Torque) {
@@ -115,7 +121,7 @@ void FlexibleBody::element_force(int e, double theta, const Eigen::Ref<const Eig
   const Eigen::MatrixXd df_dq = follows ? Eigen::MatrixXd(df_dth * dphi) : Eigen::MatrixXd::Zero(2, n);
   // Body components w = Cᵀ f; then M_o = wᵀ J p = -w_x u_a + w_y x_a, Q = Φ_aᵀ w_y.
   const Eigen::Matrix2d C = rot(theta);
-  const double xa = x_[e], ua = phi.dot(q);
+  const double xa = body.element_x(e), ua = phi.dot(q);
   const Eigen::Vector2d w = C.transpose() * f;
   g.head<2>() = f;
   g(2) = -w(0) * ua + w(1) * xa;
@@ -131,34 +137,60 @@ void FlexibleBody::element_force(int e, double theta, const Eigen::Ref<const Eig
   d->block(3, 1, n, n) = phi.transpose() * dw_dq.row(1);
 }
 
-void FlexibleBody::generalized_force(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
-                                     const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G,
-                                     Eigen::MatrixXd* d) const {
+}  // namespace
+
+Eigen::VectorXd FlexibleBody::element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const {
+  Eigen::VectorXd g(dofs());
+  element_force_into(*this, e, theta, q, g, nullptr);
+  return g;
+}
+
+FlexibleBody::ForceDerivative FlexibleBody::element_force_derivative(int e, double theta,
+                                                                     const Eigen::Ref<const Eigen::VectorXd>& q) const {
+  ForceDerivative r;
+  r.value.resize(dofs());
+  element_force_into(*this, e, theta, q, r.value, &r.derivative);
+  return r;
+}
+
+Eigen::VectorXd FlexibleBody::generalized_force(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                                const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  Eigen::VectorXd G(dofs());
+  detail::generalized_force(*this, theta, q, commands, G);
+  return G;
+}
+
+FlexibleBody::ForceDerivative FlexibleBody::generalized_force_derivative(
+    double theta, const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& commands) const {
   const int N = dofs();
-  G.setZero();
-  if (!d) {
-    for (int e = 0; e < static_cast<int>(elements_.size()); ++e)
-      if (commands(e) != 0.0) add_element_force(e, theta, q, commands(e), G);
-    return;
-  }
-  d->setZero(N, 1 + n());
+  ForceDerivative r;
+  r.value = Eigen::VectorXd::Zero(N);
+  r.derivative.setZero(N, 1 + n());
   Eigen::VectorXd g(N);
   Eigen::MatrixXd dg;
   for (int e = 0; e < static_cast<int>(elements_.size()); ++e) {
     if (commands(e) == 0.0) continue;
-    element_force(e, theta, q, g, &dg);
-    G += commands(e) * g;
-    *d += commands(e) * dg;
+    element_force_into(*this, e, theta, q, g, &dg);
+    r.value += commands(e) * g;
+    r.derivative += commands(e) * dg;
   }
+  return r;
 }
 
-void FlexibleBody::add_element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q, double scale,
-                                     Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q,
-                                     Eigen::VectorXd* dG) const {
-  const int n = this->n();
-  const ForceElement& el = elements_[e];
-  const Eigen::RowVectorXd& phi = phi_[e];
-  const Eigen::RowVectorXd& dphi = dphi_[e];
+void detail::generalized_force(const FlexibleBody& body, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                               const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G) {
+  G.setZero();
+  for (int e = 0; e < static_cast<int>(body.elements().size()); ++e)
+    if (commands(e) != 0.0) add_element_force(body, e, theta, q, commands(e), G);
+}
+
+void detail::add_element_force(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                               double scale, Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q,
+                               Eigen::VectorXd* dG) {
+  const int n = body.n();
+  const ForceElement& el = body.elements()[e];
+  const Eigen::RowVectorXd& phi = body.element_phi(e);
+  const Eigen::RowVectorXd& dphi = body.element_slope(e);
   if (el.type == ForceElement::Type::Torque) {  // eq. 6.4c: no dependence on configuration
     G(2) += scale;
     G.tail(n).noalias() += scale * dphi.transpose();
@@ -170,7 +202,7 @@ void FlexibleBody::add_element_force(int e, double theta, const Eigen::Ref<const
   applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df);
   df *= d_theta + (follows && d_q ? dphi.dot(*d_q) : 0.0);
   const Eigen::Matrix2d C = rot(theta);
-  const double xa = x_[e], ua = phi.dot(q);
+  const double xa = body.element_x(e), ua = phi.dot(q);
   const Eigen::Vector2d w = C.transpose() * f;
   G.head<2>() += scale * f;
   G(2) += scale * (-w(0) * ua + w(1) * xa);

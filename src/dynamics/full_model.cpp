@@ -1,8 +1,10 @@
+// The full nonlinear model (eq. 6.2): residual, right-hand side, invariants.
 #include "freeflex/dynamics/full_model.hpp"
 
 #include <cmath>
 #include <cstddef>
 
+#include "dynamics/body_kernels.hpp"
 #include "planar.hpp"
 
 namespace freeflex {
@@ -13,8 +15,7 @@ const Eigen::Matrix2d& kJ = planar::J();
 
 FullModel::FullModel(const FlexibleBody& body) : body_(body) {
   const int N = body_.dofs();
-  Eigen::MatrixXd Mb0(N, N);
-  body_.mass_matrix(0.0, Eigen::VectorXd::Zero(body_.n()), Mb0);
+  const Eigen::MatrixXd Mb0 = body_.mass_matrix(0.0, Eigen::VectorXd::Zero(body_.n()));
   // 𝕄_b(0) is symmetric positive definite and well conditioned (the basis is orthogonal in
   // M): its inverse, formed once, turns each solve into one matrix-vector product.
   rest_inverse_ = Mb0.llt().solve(Eigen::MatrixXd::Identity(N, N));
@@ -23,6 +24,7 @@ FullModel::FullModel(const FlexibleBody& body) : body_(body) {
 FullModel::Data FullModel::create_data() const {
   const int N = body_.dofs();
   Data d;
+  d.x_dot.resize(2 * N);
   d.G.resize(N);
   d.b.resize(N);
   d.Mq.resize(body_.n());
@@ -54,16 +56,15 @@ Eigen::VectorXd FullModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
                                     const Eigen::Ref<const Eigen::VectorXd>& zdd,
                                     const Eigen::Ref<const Eigen::VectorXd>& commands) const {
   const int N = body_.dofs(), n = body_.n();
-  Eigen::MatrixXd Mz(N, N);
-  body_.mass_matrix(z(2), z.tail(n), Mz);
-  Eigen::VectorXd h(N), G(N), Mq(n);
+  const Eigen::MatrixXd Mz = body_.mass_matrix(z(2), z.tail(n));
+  Eigen::VectorXd h(N), Mq(n);
   bias(z, zd, h, Mq);
-  body_.generalized_force(z(2), z.tail(n), commands, G);
+  const Eigen::VectorXd G = body_.generalized_force(z(2), z.tail(n), commands);
   return Mz * zdd + h - G;
 }
 
 bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
-                    const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> x_dot) const {
+                    const Eigen::Ref<const Eigen::VectorXd>& commands) const {
   // The same equations as residual(), written as plain loops over raw arrays: this runs
   // tens of thousands of times per simulation on vectors of 9 to 30 entries, where the
   // setup of Eigen's dynamic-size kernels costs more than the arithmetic.
@@ -75,7 +76,7 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   const double* qd = zd + 3;
   const double th = z[2], thd = zd[2], thd2 = thd * thd;
   const double c = std::cos(th), s = std::sin(th);
-  body_.generalized_force(th, x.segment(3, n), commands, d.G);  // R rows in inertial axes
+  detail::generalized_force(body_, th, x.segment(3, n), commands, d.G);  // R rows in inertial axes
   const double* G = d.G.data();
   double* Mq = d.Mq.data();
   double* Kq = d.Kq.data();
@@ -113,6 +114,7 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   }
   // 𝕄_b (Tᵀ z'') = g with 𝕄_b = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ], S = [[0, −Φ̄q], [−Φ̄q, qᵀMq]]:
   // w = y − W S (I + Uᵀ W S)⁻¹ Uᵀ y with y = 𝕄_b(0)⁻¹ g (no S⁻¹: S is singular at q = 0).
+  Eigen::VectorXd& x_dot = d.x_dot;
   double* w = x_dot.data() + N;
   for (int i = 0; i < N; ++i) w[i] = 0.0;
   for (int j = 0; j < N; ++j) {
@@ -141,8 +143,7 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
 
 double FullModel::energy(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   const int N = body_.dofs(), n = body_.n();
-  Eigen::MatrixXd Mz(N, N);
-  body_.mass_matrix(x(2), x.segment(3, n), Mz);
+  const Eigen::MatrixXd Mz = body_.mass_matrix(x(2), x.segment(3, n));
   const auto zd = x.tail(N);
   const auto q = x.segment(3, n);
   return 0.5 * zd.dot(Mz * zd) + 0.5 * q.dot(body_.integrals().K * q);

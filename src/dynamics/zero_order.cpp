@@ -1,3 +1,5 @@
+// The zero-order (rigid) model and the rigid trajectories the first-order model is built
+// about: sampled (quintic Hermite) and continued at rest past their end.
 #include "freeflex/dynamics/zero_order.hpp"
 
 #include <algorithm>
@@ -12,8 +14,7 @@ Eigen::Vector3d ZeroOrderModel::acceleration(const Eigen::Ref<const Eigen::Vecto
   const int n = body_.n();
   const double th = x0(2), thd = x0(5), c = std::cos(th), s = std::sin(th);
   const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
-  Eigen::VectorXd G(body_.dofs());
-  body_.generalized_force(th, q0, commands, G);
+  const Eigen::VectorXd G = body_.generalized_force(th, q0, commands);
   // eq. 6.3: C J s0 = S_o [-sin, cos], C s0 = S_o [cos, sin]
   Eigen::Matrix3d Mrr;
   Mrr << mi.m, 0.0, -mi.S_o * s,  //
@@ -23,10 +24,12 @@ Eigen::Vector3d ZeroOrderModel::acceleration(const Eigen::Ref<const Eigen::Vecto
   return Mrr.ldlt().solve(rhs);
 }
 
-void ZeroOrderModel::rhs(const Eigen::Ref<const Eigen::VectorXd>& x0, const Eigen::Ref<const Eigen::VectorXd>& commands,
-                         Eigen::Ref<Eigen::VectorXd> x0_dot) const {
+Eigen::Matrix<double, 6, 1> ZeroOrderModel::rhs(const Eigen::Ref<const Eigen::VectorXd>& x0,
+                                                const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  Eigen::Matrix<double, 6, 1> x0_dot;
   x0_dot.head<3>() = x0.tail<3>();
   x0_dot.tail<3>() = acceleration(x0, commands);
+  return x0_dot;
 }
 
 SampledRigidTrajectory::SampledRigidTrajectory(std::vector<Piece> pieces) : pieces_(std::move(pieces)) {

@@ -1,4 +1,5 @@
-#include "design_reader.hpp"
+// The validating reader over a design file's TOML tables (io/design_reader.hpp).
+#include "io/design_reader.hpp"
 
 #include <cctype>
 #include <cmath>
@@ -119,12 +120,18 @@ int Section::line(const std::string& key) const {
   return n ? line_of(*n) : line_;
 }
 
+void Section::report(const std::string& key, int line, const std::string& message) {
+  troubled_.insert(key);
+  problems_.add(line, message);
+}
+
 const toml::node* Section::get(const std::string& key) {
   asked_.insert(key);
   return table_ ? table_->get(key) : nullptr;
 }
 
 void Section::problem(const std::string& key, const std::string& message) {
+  troubled_.insert(key);
   const toml::node* n = table_ ? table_->get(key) : nullptr;
   problems_.add(n ? line_of(*n) : line_, message);
 }
@@ -132,20 +139,20 @@ void Section::problem(const std::string& key, const std::string& message) {
 std::optional<double> Section::number(const std::string& key, const Range& range, bool required) {
   const toml::node* n = get(key);
   if (!n) {
-    if (required) problems_.add(line_, key_path(key) + " is required (a number that " + range.describe() + ")");
+    if (required) report(key, line_, key_path(key) + " is required (a number that " + range.describe() + ")");
     return std::nullopt;
   }
   if (!n->is_number()) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", must be a number");
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", must be a number");
     return std::nullopt;
   }
   const double v = *n->value<double>();
   if (!std::isfinite(v)) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", must be a finite number");
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", must be a finite number");
     return std::nullopt;
   }
   if (!range.contains(v)) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", " + range.describe(v));
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", " + range.describe(v));
     return std::nullopt;
   }
   return v;
@@ -155,16 +162,16 @@ std::optional<long long> Section::integer(const std::string& key, long long lo, 
   const std::string allowed = "must be a whole number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   const toml::node* n = get(key);
   if (!n) {
-    if (required) problems_.add(line_, key_path(key) + " is required (" + allowed.substr(5) + ")");
+    if (required) report(key, line_, key_path(key) + " is required (" + allowed.substr(5) + ")");
     return std::nullopt;
   }
   if (!n->is_integer()) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", " + allowed);
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", " + allowed);
     return std::nullopt;
   }
   const long long v = *n->value<long long>();
   if (v < lo || v > hi) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", " + allowed);
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", " + allowed);
     return std::nullopt;
   }
   return v;
@@ -173,11 +180,11 @@ std::optional<long long> Section::integer(const std::string& key, long long lo, 
 std::optional<bool> Section::boolean(const std::string& key, bool required) {
   const toml::node* n = get(key);
   if (!n) {
-    if (required) problems_.add(line_, key_path(key) + " is required (true or false)");
+    if (required) report(key, line_, key_path(key) + " is required (true or false)");
     return std::nullopt;
   }
   if (!n->is_boolean()) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", must be true or false");
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", must be true or false");
     return std::nullopt;
   }
   return *n->value<bool>();
@@ -194,17 +201,17 @@ bool plain_name(const std::string& v, const char* also) {
 std::optional<std::string> Section::string(const std::string& key, bool required, bool identifier) {
   const toml::node* n = get(key);
   if (!n) {
-    if (required) problems_.add(line_, key_path(key) + " is required (a string)");
+    if (required) report(key, line_, key_path(key) + " is required (a string)");
     return std::nullopt;
   }
   if (!n->is_string()) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", must be a string");
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", must be a string");
     return std::nullopt;
   }
   std::string v = *n->value<std::string>();
   if (identifier) {
     if (!plain_name(v)) {
-      problems_.add(line_of(*n), key_path(key) + " = " + show(*n) +
+      report(key, line_of(*n), key_path(key) + " = " + show(*n) +
                                      ", must be 1 to 64 letters, digits, '_' or '-' (it names files)");
       return std::nullopt;
     }
@@ -219,14 +226,14 @@ std::optional<std::string> Section::choice(const std::string& key, const std::ve
   const toml::node* n = table_ ? table_->get(key) : nullptr;
   if (!n && required) {
     asked_.insert(key);
-    problems_.add(line_, key_path(key) + " is required (one of " + list + ")");
+    report(key, line_, key_path(key) + " is required (one of " + list + ")");
     return std::nullopt;
   }
   auto v = string(key, false);
   if (!v) return std::nullopt;
   for (const auto& a : allowed)
     if (*v == a) return v;
-  problems_.add(line_of(*n), key_path(key) + " = \"" + *v + "\", must be one of " + list);
+  report(key, line_of(*n), key_path(key) + " = \"" + *v + "\", must be one of " + list);
   return std::nullopt;
 }
 
@@ -236,18 +243,18 @@ std::optional<std::vector<long long>> Section::integer_array(const std::string& 
                               std::to_string(hi) + "]";
   const toml::node* n = get(key);
   if (!n) {
-    if (required) problems_.add(line_, key_path(key) + " is required (" + allowed.substr(5) + ")");
+    if (required) report(key, line_, key_path(key) + " is required (" + allowed.substr(5) + ")");
     return std::nullopt;
   }
   const toml::array* arr = n->as_array();
   if (!arr || arr->empty()) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", " + allowed + " (not empty)");
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", " + allowed + " (not empty)");
     return std::nullopt;
   }
   std::vector<long long> out;
   for (const auto& e : *arr) {
     if (!e.is_integer() || *e.value<long long>() < lo || *e.value<long long>() > hi) {
-      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", " + allowed);
+      report(key, line_of(*n), key_path(key) + " contains " + show(e) + ", " + allowed);
       return std::nullopt;
     }
     out.push_back(*e.value<long long>());
@@ -259,24 +266,24 @@ std::optional<std::vector<double>> Section::number_array(const std::string& key,
                                                          bool required) {
   const toml::node* n = get(key);
   if (!n) {
-    if (required) problems_.add(line_, key_path(key) + " is required (an array of numbers)");
+    if (required) report(key, line_, key_path(key) + " is required (an array of numbers)");
     return std::nullopt;
   }
   const toml::array* arr = n->as_array();
   if (!arr || arr->empty()) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", must be a non-empty array of numbers");
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", must be a non-empty array of numbers");
     return std::nullopt;
   }
   std::vector<double> out;
   for (const auto& e : *arr) {
     if (!e.is_number()) {
-      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", must be an array of numbers" +
+      report(key, line_of(*n), key_path(key) + " contains " + show(e) + ", must be an array of numbers" +
                                      (e.is_array() ? " (not of arrays)" : ""));
       return std::nullopt;
     }
     const double v = *e.value<double>();
     if (!std::isfinite(v) || !range.contains(v)) {
-      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", each entry " +
+      report(key, line_of(*n), key_path(key) + " contains " + show(e) + ", each entry " +
                                      (std::isfinite(v) ? range.describe(v) : "must be a finite number"));
       return std::nullopt;
     }
@@ -288,18 +295,18 @@ std::optional<std::vector<double>> Section::number_array(const std::string& key,
 std::optional<std::vector<std::string>> Section::string_array(const std::string& key, bool required) {
   const toml::node* n = get(key);
   if (!n) {
-    if (required) problems_.add(line_, key_path(key) + " is required (an array of strings)");
+    if (required) report(key, line_, key_path(key) + " is required (an array of strings)");
     return std::nullopt;
   }
   const toml::array* arr = n->as_array();
   if (!arr || arr->empty()) {
-    problems_.add(line_of(*n), key_path(key) + " = " + show(*n) + ", must be a non-empty array of strings");
+    report(key, line_of(*n), key_path(key) + " = " + show(*n) + ", must be a non-empty array of strings");
     return std::nullopt;
   }
   std::vector<std::string> out;
   for (const auto& e : *arr) {
     if (!e.is_string()) {
-      problems_.add(line_of(*n), key_path(key) + " contains " + show(e) + ", each entry must be a string");
+      report(key, line_of(*n), key_path(key) + " contains " + show(e) + ", each entry must be a string");
       return std::nullopt;
     }
     out.push_back(*e.value<std::string>());

@@ -4,6 +4,8 @@
 // read so that finish() can report the unknown ones. Private to src/io.
 #include <toml++/toml.h>
 
+#include "freeflex/enum_names.hpp"
+
 #include <limits>
 #include <optional>
 #include <set>
@@ -79,6 +81,12 @@ class Section {
   /// A string from a fixed set.
   std::optional<std::string> choice(const std::string& key, const std::vector<std::string>& allowed,
                                     bool required);
+  /// A value of enum E by its name (enum_names.hpp), one of its names.
+  template <class E>
+  std::optional<E> enumerated(const std::string& key, bool required) {
+    const auto v = choice(key, enum_names<E>(), required);
+    return v ? parse_enum<E>(*v) : std::nullopt;
+  }
   std::optional<std::vector<long long>> integer_array(const std::string& key, long long lo, long long hi,
                                                       bool required);
   std::optional<std::vector<std::string>> string_array(const std::string& key, bool required);
@@ -97,17 +105,20 @@ class Section {
   void finish();
   /// Adds a problem at this section (or at `key`'s line if present).
   void problem(const std::string& key, const std::string& message);
+  /// True once a problem has been reported at `key` (by a getter or problem()).
+  bool has_problem(const std::string& key) const { return troubled_.count(key) > 0; }
   std::string key_path(const std::string& key) const;
 
  private:
   const toml::node* get(const std::string& key);
+  void report(const std::string& key, int line, const std::string& message);  // a problem at `key`
   int line_of(const toml::node& n) const;
 
   const toml::table* table_;
   std::string path_;
   Problems& problems_;
   int line_;
-  std::set<std::string> asked_;
+  std::set<std::string> asked_, troubled_;
 };
 
 }  // namespace freeflex::io_detail

@@ -1,3 +1,4 @@
+// Result files: atomic writes and CSV tables (io/output.hpp).
 #include "freeflex/io/output.hpp"
 
 #include <cerrno>
@@ -63,102 +64,6 @@ void write_csv(std::ostream& os, const std::vector<std::string>& header, const E
     line += '\n';
     os.write(line.data(), static_cast<std::streamsize>(line.size()));
   }
-}
-
-Json Json::from(const Eigen::VectorXd& v) {
-  Array a;
-  for (Eigen::Index i = 0; i < v.size(); ++i) a.emplace_back(v(i));
-  return Json(std::move(a));
-}
-
-Json& Json::operator[](const std::string& key) {
-  if (std::holds_alternative<std::nullptr_t>(v_)) v_ = Object{};
-  auto* o = std::get_if<Object>(&v_);
-  if (!o) throw std::logic_error("Json: operator[] on a non-object");
-  for (auto& [k, v] : *o)
-    if (k == key) return v;
-  o->emplace_back(key, Json());
-  return o->back().second;
-}
-
-void Json::push_back(Json j) {
-  if (std::holds_alternative<std::nullptr_t>(v_)) v_ = Array{};
-  auto* a = std::get_if<Array>(&v_);
-  if (!a) throw std::logic_error("Json: push_back on a non-array");
-  a->push_back(std::move(j));
-}
-
-namespace {
-void escape(std::string& out, const std::string& s) {
-  out += '"';
-  for (char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  out += '"';
-}
-}  // namespace
-
-void Json::dump_to(std::string& out, int indent, int depth) const {
-  const std::string pad(static_cast<std::size_t>(indent * (depth + 1)), ' ');
-  const std::string pad_end(static_cast<std::size_t>(indent * depth), ' ');
-  if (std::holds_alternative<std::nullptr_t>(v_)) {
-    out += "null";
-  } else if (auto* b = std::get_if<bool>(&v_)) {
-    out += *b ? "true" : "false";
-  } else if (auto* d = std::get_if<double>(&v_)) {
-    if (!std::isfinite(*d)) {
-      out += "null";
-    } else {
-      char buf[32];
-      std::snprintf(buf, sizeof buf, "%.17g", *d);
-      out += buf;
-    }
-  } else if (auto* s = std::get_if<std::string>(&v_)) {
-    escape(out, *s);
-  } else if (auto* a = std::get_if<Array>(&v_)) {
-    bool flat = true;  // short arrays of scalars on one line
-    for (const auto& e : *a) flat = flat && !std::holds_alternative<Array>(e.v_) && !std::holds_alternative<Object>(e.v_);
-    out += '[';
-    for (std::size_t i = 0; i < a->size(); ++i) {
-      out += i ? "," : "";
-      if (!flat) out += "\n" + pad;
-      else if (i) out += ' ';
-      (*a)[i].dump_to(out, indent, depth + 1);
-    }
-    if (!flat && !a->empty()) out += "\n" + pad_end;
-    out += ']';
-  } else if (auto* o = std::get_if<Object>(&v_)) {
-    out += '{';
-    for (std::size_t i = 0; i < o->size(); ++i) {
-      out += i ? ",\n" : "\n";
-      out += pad;
-      escape(out, (*o)[i].first);
-      out += ": ";
-      (*o)[i].second.dump_to(out, indent, depth + 1);
-    }
-    if (!o->empty()) out += "\n" + pad_end;
-    out += '}';
-  }
-}
-
-std::string Json::dump(int indent) const {
-  std::string out;
-  dump_to(out, indent, 0);
-  out += '\n';
-  return out;
 }
 
 }  // namespace freeflex

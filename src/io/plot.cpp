@@ -1,3 +1,4 @@
+// Figures through gnuplot: the script beside the data, the PNG rendered to a temporary name.
 #include "freeflex/io/plot.hpp"
 
 #include <cstdio>

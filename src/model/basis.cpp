@@ -1,3 +1,5 @@
+// The paper's admissible functions: cantilever roots and modes evaluated without
+// cancellation, and the basis on both halves of the beam.
 #include "freeflex/model/basis.hpp"
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// The beam: validation of its properties, the reference point, mass and stiffness along it.
 #include "freeflex/model/beam.hpp"
 
 #include <cmath>

@@ -1,8 +1,11 @@
+// Loads and actuators: time profiles, and every element's commands at an instant.
 #include "freeflex/model/loads.hpp"
 
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+
+#include "model/commands.hpp"
 
 namespace freeflex {
 
@@ -29,10 +32,16 @@ double TimeProfile::value(const Instant& at) const {
   return values_[i] + s * (values_[i + 1] - values_[i]);
 }
 
-void Excitation::evaluate(const Instant& at, Eigen::Ref<Eigen::VectorXd> commands) const {
-  for (std::size_t e = 0; e < profiles.size(); ++e)
-    commands(static_cast<Eigen::Index>(e)) = profiles[e] ? profiles[e]->value(at) : 0.0;
-  if (add_commands) add_commands(at, commands);
+void detail::evaluate_commands(const Excitation& ex, const Instant& at, Eigen::Ref<Eigen::VectorXd> commands) {
+  for (std::size_t e = 0; e < ex.profiles.size(); ++e)
+    commands(static_cast<Eigen::Index>(e)) = ex.profiles[e] ? ex.profiles[e]->value(at) : 0.0;
+  if (ex.add_commands) ex.add_commands(at, commands);
+}
+
+Eigen::VectorXd Excitation::commands(const Instant& at) const {
+  Eigen::VectorXd c(static_cast<Eigen::Index>(profiles.size()));
+  detail::evaluate_commands(*this, at, c);
+  return c;
 }
 
 std::vector<double> Excitation::breakpoints() const {

@@ -1,3 +1,5 @@
+// The modal integrals of the discretized beam (m, S_o, I_o, M, K, Φ̄, Φ̃) by composite
+// Gauss quadrature.
 #include "freeflex/model/modal_integrals.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// Gauss-Legendre quadrature: nodes and weights, and composite rules on panels.
 #include "freeflex/model/quadrature.hpp"
 
 #include <cmath>

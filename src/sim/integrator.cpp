@@ -2,12 +2,8 @@
 // (docs/theory.md section 8).
 #include "freeflex/sim/integrator.hpp"
 
-#include <cvodes/cvodes.h>
 #include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
-#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <algorithm>
 #include <cfloat>
@@ -20,37 +16,13 @@
 #include <utility>
 #include <vector>
 
-#include "sim/fast_nvector.hpp"
+#include "sim/cvodes.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
 namespace {
 
-static_assert(sizeof(sunrealtype) == sizeof(double), "freeflex needs SUNDIALS built with double precision");
-
 std::string fmt(double v) { return util::format_number(v, 12); }
-
-/// Everything SUNDIALS allocates, freed in reverse order of creation on every path.
-struct CvodeResources {
-  SUNContext ctx = nullptr;
-  N_Vector y = nullptr;
-  void* mem = nullptr;
-  SUNMatrix A = nullptr;
-  SUNLinearSolver LS = nullptr;
-  SUNNonlinearSolver NLS = nullptr;
-
-  CvodeResources() = default;
-  CvodeResources(const CvodeResources&) = delete;
-  CvodeResources& operator=(const CvodeResources&) = delete;
-  ~CvodeResources() {
-    if (mem) CVodeFree(&mem);  // first: it references the solvers and the context
-    if (NLS) SUNNonlinSolFree(NLS);
-    if (LS) SUNLinSolFree(LS);
-    if (A) SUNMatDestroy(A);
-    if (y) N_VDestroy(y);
-    if (ctx) SUNContext_Free(&ctx);
-  }
-};
 
 /// Passed to the C callbacks as user data.
 struct CallbackData {
@@ -59,7 +31,6 @@ struct CallbackData {
   double piece_mid = 0.0;
   std::string callback_error;  ///< why the rhs / Jacobian wrapper failed (first failure kept)
   bool failed = false;         ///< a callback failed unrecoverably: every later rhs call fails too
-  std::string cvode_error;     ///< the last error message CVODE itself produced
   double rtol = 0.0;
   Eigen::VectorXd atol;        ///< per component
 };
@@ -153,42 +124,7 @@ extern "C" int freeflex_cvode_jac(sunrealtype t, N_Vector y, N_Vector /*fy*/, SU
   return -1;
 }
 
-extern "C" void freeflex_cvode_err(int error_code, const char* module, const char* function, char* msg,
-                                   void* user_data) {
-  // Warnings (error_code > 0, e.g. "t + h = t") are dropped; errors are kept for the message.
-  if (error_code >= 0) return;
-  auto* data = static_cast<CallbackData*>(user_data);
-  try {
-    data->cvode_error = std::string(module ? module : "CVODE") + "::" + (function ? function : "?") + ": " +
-                        (msg ? msg : "");
-  } catch (...) {
-    // out of memory while copying a message: nothing sensible to do, and nothing may escape
-  }
-}
-
-std::string flag_name(long flag) {
-  char* name = CVodeGetReturnFlagName(flag);  // malloc'ed by SUNDIALS
-  if (!name) return "flag " + std::to_string(flag);
-  std::string s(name);
-  std::free(name);
-  return s;
-}
-
-/// Setup calls must succeed; a failure here is an internal error, not a numerical one.
-void check_setup(int flag, const char* call, const CallbackData& data) {
-  if (flag == CV_SUCCESS) return;
-  std::string msg = std::string("freeflex::integrate: ") + call + " failed with " + flag_name(flag);
-  if (!data.cvode_error.empty()) msg += " (" + data.cvode_error + ")";
-  throw std::runtime_error(msg);
-}
-
-template <class P>
-P check_alloc(P p, const char* call) {
-  if (!p) throw std::runtime_error(std::string("freeflex::integrate: ") + call + " failed (out of memory?)");
-  return p;
-}
-
-std::string explain(int flag, const CallbackData& data, long max_steps) {
+std::string explain(int flag, const CallbackData& data, const std::string& cvode_error, long max_steps) {
   std::string why;
   switch (flag) {
     case CV_TOO_MUCH_WORK:
@@ -232,14 +168,16 @@ std::string explain(int flag, const CallbackData& data, long max_steps) {
     default:
       break;
   }
-  std::string detail = !data.callback_error.empty() ? data.callback_error : data.cvode_error;
+  std::string detail = !data.callback_error.empty() ? data.callback_error : cvode_error;
   if (!detail.empty()) why = why.empty() ? detail : why + ": " + detail;
   return why;
 }
 
+void fail(const std::string& what) { throw std::invalid_argument("freeflex::integrate: " + what); }
+
+
 void validate(const OdeSystem& system, const Eigen::Ref<const Eigen::VectorXd>& x0,
               const std::vector<double>& output_times, const IntegratorOptions& options) {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("freeflex::integrate: " + what); };
   if (system.dim < 1) fail("expected system.dim >= 1, got " + std::to_string(system.dim));
   if (x0.size() != system.dim)
     fail("expected x0 of size system.dim = " + std::to_string(system.dim) + ", got " + std::to_string(x0.size()));
@@ -253,16 +191,25 @@ void validate(const OdeSystem& system, const Eigen::Ref<const Eigen::VectorXd>& 
       fail("expected strictly ascending output times, got " + fmt(output_times[i - 1]) + " then " +
            fmt(output_times[i]) + " at index " + std::to_string(i));
   }
-  if (!(options.rtol > 0.0) || !std::isfinite(options.rtol))
-    fail("expected finite rtol > 0, got " + fmt(options.rtol));
-  if (!(options.atol > 0.0) || !std::isfinite(options.atol))
-    fail("expected finite atol > 0, got " + fmt(options.atol));
-  if (!(options.max_step >= 0.0) || !std::isfinite(options.max_step))
-    fail("expected finite max_step >= 0 (0: no limit), got " + fmt(options.max_step));
-  if (options.max_steps <= 0) fail("expected max_steps > 0, got " + std::to_string(options.max_steps));
+  const std::vector<FieldProblem> p = problems(options);
+  if (!p.empty()) fail(p.front().message);
 }
 
 }  // namespace
+
+std::vector<FieldProblem> problems(const IntegratorOptions& o) {
+  std::vector<FieldProblem> p;
+  if (!(o.rtol > 0.0) || !std::isfinite(o.rtol)) p.push_back({"rtol", "rtol = " + fmt(o.rtol) + ", expected a finite value > 0"});
+  if (!(o.atol > 0.0) || !std::isfinite(o.atol)) p.push_back({"atol", "atol = " + fmt(o.atol) + ", expected a finite value > 0"});
+  if (!(o.max_step >= 0.0) || !std::isfinite(o.max_step))
+    p.push_back({"max_step", "max_step = " + fmt(o.max_step) + ", expected a finite value >= 0 (0: no limit)"});
+  if (o.max_steps <= 0) p.push_back({"max_steps", "max_steps = " + std::to_string(o.max_steps) + ", expected > 0"});
+  if (o.max_order < 0)
+    p.push_back({"max_order", "max_order = " + std::to_string(o.max_order) + ", expected >= 0 (0: CVODE's default)"});
+  return p;
+}
+
+void validate(const IntegratorOptions& options) { throw_if_any("integrator options", problems(options)); }
 
 bool roundoff_span(double a, double b) {
   return b - a <= 4.0 * DBL_EPSILON * std::max(std::abs(a), std::abs(b)) || b - a < kMinSpan_s;
@@ -305,7 +252,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     if (options.progress) options.progress(t);
   };
   auto finish = [&](bool ok) {
-    result.ok = ok;
+    result.status = ok ? IntegrationStatus::Completed : IntegrationStatus::Failed;
     result.t.conservativeResize(rows);
     result.x.conservativeResize(rows, n);
     return result;
@@ -331,12 +278,10 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   data.dim = n;
   data.piece_mid = 0.5 * (bounds[0] + bounds[1]);
 
-  CvodeResources cv;
-  if (SUNContext_Create(nullptr, &cv.ctx) != 0 || !cv.ctx)
-    throw std::runtime_error("freeflex::integrate: SUNContext_Create failed");
-  cv.y = check_alloc(N_VNew_Serial(static_cast<sunindextype>(n), cv.ctx), "N_VNew_Serial");
-  use_compiled_vector_kernels(cv.y);  // CVODES clones its work vectors from y: they inherit them
-  double* y = N_VGetArrayPointer(cv.y);
+  const bool bdf = options.method == IntegratorOptions::Method::Bdf;
+  cvodes::Integrator cv(n, bdf ? cvodes::Integrator::Method::Bdf : cvodes::Integrator::Method::Adams,
+                        "freeflex::integrate");
+  double* y = cv.state();
   Eigen::Map<Eigen::VectorXd> y_map(y, n);
   // x -> y for the piece starting at `start` (identity without a change of variables).
   auto enter = [&](const Instant& start, const Eigen::VectorXd& x) {
@@ -360,48 +305,35 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   };
   if (!enter(Instant{t0, data.piece_mid}, x0)) return finish(false);
 
-  const bool bdf = options.method == IntegratorOptions::Method::Bdf;
-  cv.mem = check_alloc(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, cv.ctx), "CVodeCreate");
-  check_setup(CVodeSetErrHandlerFn(cv.mem, freeflex_cvode_err, &data), "CVodeSetErrHandlerFn", data);
-  check_setup(CVodeInit(cv.mem, freeflex_cvode_rhs, t0, cv.y), "CVodeInit", data);
-  check_setup(CVodeSetUserData(cv.mem, &data), "CVodeSetUserData", data);  // also what the weights receive
+  cv.init(freeflex_cvode_rhs, t0, &data);  // the user data is also what the weights receive
   data.rtol = options.rtol;
   data.atol = change.active() && change.atol_scale.size() == n ? Eigen::VectorXd(options.atol * change.atol_scale)
                                                                 : Eigen::VectorXd::Constant(n, options.atol);
-  check_setup(CVodeWFtolerances(cv.mem, freeflex_error_weights), "CVodeWFtolerances", data);
-  check_setup(CVodeSetMaxNumSteps(cv.mem, options.max_steps), "CVodeSetMaxNumSteps", data);
-  if (options.max_step > 0.0) check_setup(CVodeSetMaxStep(cv.mem, options.max_step), "CVodeSetMaxStep", data);
-  if (options.max_order > 0) check_setup(CVodeSetMaxOrd(cv.mem, options.max_order), "CVodeSetMaxOrd", data);
-  if (bdf) {
-    cv.A = check_alloc(SUNDenseMatrix(static_cast<sunindextype>(n), static_cast<sunindextype>(n), cv.ctx),
-                       "SUNDenseMatrix");
-    cv.LS = check_alloc(SUNLinSol_Dense(cv.y, cv.A, cv.ctx), "SUNLinSol_Dense");
-    check_setup(CVodeSetLinearSolver(cv.mem, cv.LS, cv.A), "CVodeSetLinearSolver", data);
-    if (system.jacobian && !change.active())
-      check_setup(CVodeSetJacFn(cv.mem, freeflex_cvode_jac), "CVodeSetJacFn", data);
-  } else {
-    cv.NLS = check_alloc(SUNNonlinSol_FixedPoint(cv.y, 0, cv.ctx), "SUNNonlinSol_FixedPoint");
-    check_setup(CVodeSetNonlinearSolver(cv.mem, cv.NLS), "CVodeSetNonlinearSolver", data);
-  }
+  cv.weight_function(freeflex_error_weights);
+  cv.max_num_steps(options.max_steps);
+  if (options.max_step > 0.0) cv.max_step(options.max_step);
+  if (options.max_order > 0) cv.max_order(options.max_order);
+  if (bdf)
+    cv.dense_newton(system.jacobian && !change.active() ? freeflex_cvode_jac : nullptr);
+  else
+    cv.fixed_point();
 
   // Adds the counters of the current piece (CVodeInit / CVodeReInit reset them).
   auto add_statistics = [&]() {
-    long nst = 0, nfe = 0, nfe_ls = 0;
-    check_setup(CVodeGetNumSteps(cv.mem, &nst), "CVodeGetNumSteps", data);
-    check_setup(CVodeGetNumRhsEvals(cv.mem, &nfe), "CVodeGetNumRhsEvals", data);
-    if (bdf) check_setup(CVodeGetNumLinRhsEvals(cv.mem, &nfe_ls), "CVodeGetNumLinRhsEvals", data);
-    result.steps += nst;
-    result.rhs_evaluations += nfe + nfe_ls;
+    const cvodes::Counters c = cv.counters();
+    result.steps += c.steps;
+    result.rhs_evaluations += c.rhs_evaluations + c.linear_rhs_evaluations;
   };
 
   // Returns false (and fills the failure fields) when CVode failed or the state went non-finite.
   auto advance = [&](double tout, int& flag) {
-    sunrealtype tret = tout;
-    flag = CVode(cv.mem, tout, cv.y, &tret, CV_NORMAL);
+    const cvodes::Integrator::Advance step = cv.advance(tout);
+    flag = step.flag;
+    const double tret = step.reached;
     if (flag < 0) {
       result.failure_time = tret;
-      result.message = "CVODE failed at t = " + fmt(tret) + ": " + flag_name(flag);
-      const std::string why = explain(flag, data, options.max_steps);
+      result.message = "CVODE failed at t = " + fmt(tret) + ": " + cvodes::Integrator::flag_name(flag);
+      const std::string why = explain(flag, data, cv.last_error(), options.max_steps);
       if (!why.empty()) result.message += " (" + why + ")";
       return false;
     }
@@ -429,9 +361,9 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
         const Eigen::VectorXd x_at_a = Eigen::Map<const Eigen::VectorXd>(physical(a, y), n);
         if (!enter(Instant{a, data.piece_mid}, x_at_a)) return finish(false);
       }
-      check_setup(CVodeReInit(cv.mem, a, cv.y), "CVodeReInit", data);
+      cv.reinit(a);
     }
-    check_setup(CVodeSetStopTime(cv.mem, b), "CVodeSetStopTime", data);
+    cv.stop_time(b);
 
     bool at_end = false;     // CVODE has returned the state at b
     bool stepped = false;    // CVode was called in this piece

@@ -1,5 +1,5 @@
 // Modal integration variables (docs/theory.md section 8).
-#include "freeflex/sim/modal_variables.hpp"
+#include "sim/modal_variables.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -27,8 +27,7 @@ ModalVariables::ModalVariables(const FlexibleBody& body, PhysicalRhs physical,
     : n_(body.n()), N_(body.dofs()), physical_(std::move(physical)), frame_(std::move(frame)) {
   if (!physical_) throw std::invalid_argument("ModalVariables: the physical right-hand side is not set");
   const int n = n_, N = N_;
-  Eigen::MatrixXd M0(N, N);
-  body.mass_matrix(0.0, Eigen::VectorXd::Zero(n), M0);
+  const Eigen::MatrixXd M0 = body.mass_matrix(0.0, Eigen::VectorXd::Zero(n));
   const Eigen::Matrix3d Mrr = M0.topLeftCorner<3, 3>();
   const Eigen::MatrixXd Mrq = M0.topRightCorner(3, n);
   T_ = Mrr.ldlt().solve(Mrq);

@@ -1,3 +1,5 @@
+// Simulations of the three models: the full model, and the perturbation solution
+// (zero-order motion, then the first-order model about it).
 #include "freeflex/sim/simulate.hpp"
 
 #include <algorithm>
@@ -6,7 +8,9 @@
 #include <stdexcept>
 #include <utility>
 
-#include "freeflex/sim/modal_variables.hpp"
+#include "model/commands.hpp"
+#include "util/format.hpp"
+#include "sim/modal_variables.hpp"
 
 namespace freeflex {
 namespace {
@@ -14,13 +18,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-void check_options(const SimulationOptions& o) {
-  if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s))
-    throw std::invalid_argument("simulation: duration_s must be finite and > 0");
-  if (!(o.output_step_s > 0.0) || !(o.output_step_s <= o.duration_s))
-    throw std::invalid_argument("simulation: output_step_s must be in (0, duration_s]");
-  if (!(o.trajectory_step_s > 0.0)) throw std::invalid_argument("simulation: trajectory_step_s must be > 0");
-}
 
 /// The loads' breakpoints inside (0, t_end), ascending; one that leaves a piece integrate()
 /// would not step over (roundoff_span: from 0, from the one before it, or up to t_end) is left
@@ -71,8 +68,26 @@ std::unique_ptr<ModalVariables> use_variables(SimulationOptions::Variables v, co
 
 }  // namespace
 
+std::vector<FieldProblem> problems(const SimulationOptions& o) {
+  const auto num = [](double v) { return util::format_number(v, 10); };
+  std::vector<FieldProblem> p;
+  if (!(o.duration_s > 0.0) || !std::isfinite(o.duration_s))
+    p.push_back({"duration_s", "duration_s = " + num(o.duration_s) + ", expected a finite value > 0"});
+  if (!(o.output_step_s > 0.0))
+    p.push_back({"output_step_s", "output_step_s = " + num(o.output_step_s) + ", expected > 0"});
+  else if (!(o.output_step_s <= o.duration_s))
+    p.push_back({"output_step_s", "output_step_s = " + num(o.output_step_s) + " exceeds duration_s = " +
+                                      num(o.duration_s) + ", expected output_step_s <= duration_s"});
+  if (!(o.trajectory_step_s > 0.0))
+    p.push_back({"trajectory_step_s", "trajectory_step_s = " + num(o.trajectory_step_s) + ", expected > 0"});
+  for (const FieldProblem& q : problems(o.integrator)) p.push_back({"integrator." + q.field, "integrator." + q.message});
+  return p;
+}
+
+void validate(const SimulationOptions& o) { throw_if_any("simulation options", problems(o)); }
+
 std::vector<double> output_times(const SimulationOptions& o) {
-  check_options(o);
+  validate(o);
   const long steps = std::lround(std::ceil(o.duration_s / o.output_step_s - 1e-9));
   std::vector<double> t;
   for (long i = 0; i < steps; ++i) t.push_back(i * o.output_step_s);
@@ -95,15 +110,17 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
   sys.dim = 2 * N;
   sys.rhs = [&model, &excitation, data, u](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
                                            Eigen::Ref<Eigen::VectorXd> xd) {
-    excitation.evaluate(at, *u);
-    return model.rhs(*data, x, *u, xd);
+    detail::evaluate_commands(excitation, at, *u);
+    if (!model.rhs(*data, x, *u)) return false;
+    xd = data->x_dot;
+    return true;
   };
   sys.last_error = [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
   const auto modal = use_variables(options.full_variables, body, sys, nullptr);
   const IntegrationResult ir =
       integrate(sys, x0, output_times(options), breakpoints_within(excitation, options.duration_s), options.integrator);
   SimulationResult r;
-  r.ok = ir.ok;
+  r.status = ir.status;
   r.message = ir.message;
   r.t = ir.t;
   r.z = ir.x.leftCols(N);
@@ -146,8 +163,8 @@ PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitat
   zsys.dim = 6;
   zsys.rhs = [&zero, &excitation, u](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
                                      Eigen::Ref<Eigen::VectorXd> xd) {
-    excitation.evaluate(at, *u);
-    zero.rhs(x, *u, xd);
+    detail::evaluate_commands(excitation, at, *u);
+    xd = zero.rhs(x, *u);
     return xd.allFinite();
   };
   // The first-order model takes θ0'' and R0'' from the quintic interpolant of these
@@ -159,11 +176,11 @@ PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitat
   zero_options.atol = std::min(zero_options.atol, 1e-14);
   zero_options.progress = nullptr;  // a few dozen steps; progress is the first-order pass's
   const IntegrationResult zr = integrate(zsys, Eigen::VectorXd::Zero(6), all, cuts, zero_options);
-  out.zero_order.ok = zr.ok;
+  out.zero_order.status = zr.status;
   out.zero_order.message = zr.message;
   out.zero_order.rhs_evaluations = zr.rhs_evaluations;
   out.zero_order.steps = zr.steps;
-  if (!zr.ok) {
+  if (!zr.ok()) {
     out.total = out.zero_order;
     out.total.message = "zero-order simulation: " + zr.message;
     out.total.wall_time_s = seconds_since(t_start);
@@ -179,7 +196,7 @@ PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitat
     const double mid = 0.5 * (edges[p] + edges[p + 1]);
     for (std::size_t i = piece_first[p]; i < nodes.size() && nodes[i] <= edges[p + 1]; ++i) {
       const Eigen::VectorXd x = state_at(nodes[i]);
-      excitation.evaluate({nodes[i], mid}, *u);  // this piece's side of any jump
+      detail::evaluate_commands(excitation, {nodes[i], mid}, *u);  // this piece's side of any jump
       RigidState s;
       s.pos = x.head<3>();
       s.vel = x.tail<3>();
@@ -211,7 +228,7 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
     if (b > 0.0 && b < options.duration_s) cuts.push_back(b);
   PerturbationResult out;
   out.nominal = nominal;
-  out.zero_order.ok = true;
+  out.zero_order.status = IntegrationStatus::Completed;
   // Zero-order results at the output times.
   const int T = static_cast<int>(outs.size());
   out.zero_order.t = Eigen::Map<const Eigen::VectorXd>(outs.data(), T);
@@ -225,32 +242,32 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
 
   // 2. First-order motion about it, open loop (u1 = 0).
   const auto cached = std::make_shared<const LastStateCache>(nominal);
-  const FirstOrderModel first(body, *cached,
-                              [&excitation](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) { excitation.evaluate(at, c); },
-                              {});
+  const FirstOrderModel first(
+      body, *cached,
+      [&excitation](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) { detail::evaluate_commands(excitation, at, c); },
+      {});
+  auto data = std::make_shared<FirstOrderModel::Data>(first.create_data());
   OdeSystem fsys;
   fsys.dim = 2 * N;
   const Eigen::VectorXd none(0);
-  fsys.rhs = [&first, &none](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
-                             Eigen::Ref<Eigen::VectorXd> xd) {
-    first.rhs(at, x, none, xd);
+  fsys.rhs = [&first, &none, data](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                   Eigen::Ref<Eigen::VectorXd> xd) {
+    xd = first.rhs(*data, at, x, none);
     return xd.allFinite();
   };
-  fsys.jacobian = [&first](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>&,
-                           Eigen::Ref<Eigen::MatrixXd> J) {
-    Eigen::MatrixXd A, B;
-    Eigen::VectorXd g;
-    first.state_space(at, A, B, g);
-    J = A;
-    return A.allFinite();
+  fsys.jacobian = [&first, data](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>&,
+                                 Eigen::Ref<Eigen::MatrixXd> J) {
+    const StateSpace& ss = first.state_space(*data, at);
+    J = ss.A;
+    return ss.A.allFinite();
   };
   fsys.last_error = [] { return std::string("the first-order right-hand side is not finite"); };
   const auto modal = use_variables(options.first_order_variables, body, fsys, cached);
   const IntegrationResult fr = integrate(fsys, Eigen::VectorXd::Zero(2 * N), outs, cuts, options.integrator);
   out.first_order_rhs_evaluations = fr.rhs_evaluations;
   SimulationResult& tot = out.total;
-  tot.ok = fr.ok;
-  tot.message = fr.ok ? "" : "first-order simulation: " + fr.message;
+  tot.status = fr.status;
+  tot.message = fr.ok() ? "" : "first-order simulation: " + fr.message;
   tot.t = fr.t;
   const int reached = static_cast<int>(fr.t.size());
   tot.z = fr.x.leftCols(N) + out.zero_order.z.topRows(reached);

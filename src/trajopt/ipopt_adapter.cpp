@@ -1,8 +1,9 @@
-// Ipopt 3.11 behind solve_maneuver: a TNLP that forwards to CollocationNlp, option
-// handling, status mapping, and the mesh-refinement loop. Ipopt headers stay here.
+// Ipopt 3.11 behind the collocation NLP: a TNLP that forwards to CollocationNlp and its
+// workspace, the options freeflex sets and the user's, and Ipopt's return status in
+// freeflex's terms. Ipopt's headers stay in this file.
+#include "trajopt/ipopt_adapter.hpp"
+
 #include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
@@ -15,10 +16,7 @@
 #include <coin/IpSolveStatistics.hpp>
 #include <coin/IpTNLP.hpp>
 
-#include "freeflex/trajopt/collocation.hpp"
-#include "freeflex/trajopt/solve.hpp"
-
-namespace freeflex {
+namespace freeflex::detail {
 
 namespace {
 
@@ -57,7 +55,8 @@ class StringJournal : public Ipopt::Journal {
 /// first message is kept and reported in the result.
 class CollocationTnlp : public Ipopt::TNLP {
  public:
-  CollocationTnlp(const CollocationNlp& nlp, Eigen::VectorXd w0) : nlp_(nlp), w0_(std::move(w0)) {}
+  CollocationTnlp(const CollocationNlp& nlp, Eigen::VectorXd w0)
+      : nlp_(nlp), data_(nlp.create_data()), w0_(std::move(w0)) {}
 
   Eigen::VectorXd w_final;
   double obj_final = std::numeric_limits<double>::quiet_NaN();
@@ -75,14 +74,13 @@ class CollocationTnlp : public Ipopt::TNLP {
 
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l, Number* g_u) override {
     return guard([&] {
-      Eigen::Map<Eigen::VectorXd> xl(x_l, n), xu(x_u, n), gl(g_l, m), gu(g_u, m);
-      nlp_.bounds(xl, xu, gl, gu);
+      const CollocationNlp::Bounds b = nlp_.bounds();
       // Ipopt reads |bound| >= 1e19 as no bound.
       const double big = 1e20;
-      xl = xl.cwiseMax(-big);
-      xu = xu.cwiseMin(big);
-      gl = gl.cwiseMax(-big);
-      gu = gu.cwiseMin(big);
+      Eigen::Map<Eigen::VectorXd>(x_l, n) = b.w_lower.cwiseMax(-big);
+      Eigen::Map<Eigen::VectorXd>(x_u, n) = b.w_upper.cwiseMin(big);
+      Eigen::Map<Eigen::VectorXd>(g_l, m) = b.g_lower.cwiseMax(-big);
+      Eigen::Map<Eigen::VectorXd>(g_u, m) = b.g_upper.cwiseMin(big);
     });
   }
 
@@ -104,15 +102,13 @@ class CollocationTnlp : public Ipopt::TNLP {
 
   bool eval_grad_f(Index n, const Number* x, bool, Number* grad_f) override {
     return guard([&] {
-      Eigen::Map<Eigen::VectorXd> g(grad_f, n);
-      nlp_.objective_gradient(Eigen::Map<const Eigen::VectorXd>(x, n), g);
+      Eigen::Map<Eigen::VectorXd>(grad_f, n) = nlp_.objective_gradient(Eigen::Map<const Eigen::VectorXd>(x, n));
     });
   }
 
   bool eval_g(Index n, const Number* x, bool, Index m, Number* g) override {
     return guard([&] {
-      Eigen::Map<Eigen::VectorXd> gv(g, m);
-      nlp_.constraints(Eigen::Map<const Eigen::VectorXd>(x, n), gv);
+      Eigen::Map<Eigen::VectorXd>(g, m) = nlp_.constraints(data_, Eigen::Map<const Eigen::VectorXd>(x, n));
     });
   }
 
@@ -124,8 +120,8 @@ class CollocationTnlp : public Ipopt::TNLP {
         std::copy(nlp_.jacobian_cols().begin(), nlp_.jacobian_cols().end(), jCol);
         return;
       }
-      Eigen::Map<Eigen::VectorXd> v(values, nele_jac);
-      nlp_.jacobian_values(Eigen::Map<const Eigen::VectorXd>(x, n), v);
+      Eigen::Map<Eigen::VectorXd>(values, nele_jac) =
+          nlp_.jacobian_values(data_, Eigen::Map<const Eigen::VectorXd>(x, n));
     });
   }
 
@@ -137,9 +133,8 @@ class CollocationTnlp : public Ipopt::TNLP {
         std::copy(nlp_.hessian_cols().begin(), nlp_.hessian_cols().end(), jCol);
         return;
       }
-      Eigen::Map<Eigen::VectorXd> v(values, nele_hess);
-      nlp_.hessian_values(Eigen::Map<const Eigen::VectorXd>(x, n), obj_factor,
-                          Eigen::Map<const Eigen::VectorXd>(lambda, m), v);
+      Eigen::Map<Eigen::VectorXd>(values, nele_hess) = nlp_.hessian_values(
+          data_, Eigen::Map<const Eigen::VectorXd>(x, n), obj_factor, Eigen::Map<const Eigen::VectorXd>(lambda, m));
     });
   }
 
@@ -172,6 +167,7 @@ class CollocationTnlp : public Ipopt::TNLP {
   }
 
   const CollocationNlp& nlp_;
+  CollocationNlp::Data data_;  // the NLP's cache of f and ∂f at Ipopt's last point
   Eigen::VectorXd w0_;
 };
 
@@ -207,76 +203,6 @@ void set_user_option(Ipopt::IpoptApplication& app, const std::string& name, cons
       ok = reg->IsValidStringSetting(value) && app.Options()->SetStringValue(name, value);
   }
   if (!ok) throw std::invalid_argument(where + ": value rejected by Ipopt (out of range or not a valid choice)");
-}
-
-struct IpoptRun {
-  Ipopt::ApplicationReturnStatus status = Ipopt::Internal_Error;
-  Eigen::VectorXd w;
-  double objective = std::numeric_limits<double>::quiet_NaN();
-  int iterations = 0;
-  std::string error, log;
-};
-
-IpoptRun run_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const TrajoptOptions& o, bool check_derivatives,
-                   bool warm) {
-  // Quiet runs have no console journal rather than print_level 0, which would also
-  // silence the journals that want the log (output_file, keep_log).
-  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication(o.verbose);
-  Ipopt::OptionsList& opts = *app->Options();
-  opts.SetStringValue("sb", "yes");  // no banner
-  opts.SetIntegerValue("print_level", 5);
-  opts.SetNumericValue("tol", o.tol);
-  opts.SetIntegerValue("max_iter", o.max_iter);
-  opts.SetStringValue("hessian_approximation", "exact");
-  opts.SetStringValue("nlp_scaling_method", "gradient-based");
-  opts.SetStringValue("derivative_test", check_derivatives ? o.derivative_test : "none");
-  opts.SetStringValue("derivative_test_print_all", "no");
-  // MUMPS' own row/column scaling misjudges the KKT matrix as singular when boundary
-  // conditions repeat what the dynamics already fix (e.g. R at rest at both ends when no
-  // actuator can push o): Ipopt then fails in its first step. Without it the
-  // regularization copes, and each factorization is ~15% cheaper. Ipopt's
-  // gradient-based NLP scaling stays on.
-  opts.SetIntegerValue("mumps_scaling", 0);
-  // Ipopt's default asks MUMPS for 10x its workspace estimate, and every factorization
-  // then pays for touching it (cost superlinear in N beyond ~400 intervals). Ipopt
-  // raises the value itself if MUMPS runs short.
-  opts.SetIntegerValue("mumps_mem_percent", 20);
-  // Approximate minimum fill keeps the factorization linear in N on these block-banded
-  // KKT systems; MUMPS' automatic choice switches to an ordering that is ~30% slower
-  // above ~10k unknowns (N ~ 800).
-  opts.SetIntegerValue("mumps_pivot_order", 2);
-  if (warm) opts.SetNumericValue("mu_init", 1e-6);  // start close to the central path of a near-optimal point
-  for (const auto& kv : o.ipopt_options) set_user_option(*app, kv.first, kv.second);
-
-  IpoptRun run;
-  const Ipopt::ApplicationReturnStatus init = app->Initialize("");  // "": no ipopt.opt from the working directory
-  if (init != Ipopt::Solve_Succeeded) {
-    run.status = init;
-    run.error = "Ipopt initialization failed";
-    return run;
-  }
-  const bool derivative_check = check_derivatives && o.derivative_test != "none";
-  if (o.keep_log || derivative_check) {
-    // derivative_errors() reads the checker's verdict from this log, at print level 5 or more
-    const int level = derivative_check ? std::max(o.log_level, int{Ipopt::J_ITERSUMMARY})
-                                       : std::clamp(o.log_level, 0, int{Ipopt::J_ALL});
-    Ipopt::SmartPtr<Ipopt::Journal> j = new StringJournal(static_cast<Ipopt::EJournalLevel>(level), &run.log);
-    app->Jnlst()->AddJournal(j);
-  }
-  Ipopt::SmartPtr<CollocationTnlp> tnlp = new CollocationTnlp(nlp, w0);
-  try {
-    run.status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
-  } catch (const std::exception& e) {  // Ipopt catches its own; this is a last resort
-    run.status = Ipopt::NonIpopt_Exception_Thrown;
-    run.error = e.what();
-  }
-  if (Ipopt::IsValid(app->Statistics())) run.iterations = app->Statistics()->IterationCount();
-  if (tnlp->finalized) {
-    run.w = tnlp->w_final;
-    run.objective = tnlp->obj_final;
-  }
-  if (run.error.empty()) run.error = tnlp->error;
-  return run;
 }
 
 const char* ipopt_status_name(Ipopt::ApplicationReturnStatus s) {
@@ -333,122 +259,72 @@ std::string describe(Ipopt::ApplicationReturnStatus s, const std::string& error)
   return msg;
 }
 
-/// Errors reported by Ipopt's derivative checker in its log; -1 if it printed no verdict.
-int derivative_errors(const std::string& log) {
-  int total = -1;
-  std::size_t pos = 0;
-  const std::string ok = "No errors detected by derivative checker.";
-  const std::string bad = "Derivative checker detected ";
-  while (true) {
-    const std::size_t a = log.find(ok, pos), b = log.find(bad, pos);
-    if (a == std::string::npos && b == std::string::npos) break;
-    if (total < 0) total = 0;
-    if (b == std::string::npos || (a != std::string::npos && a < b)) {
-      pos = a + ok.size();
-    } else {
-      total += std::atoi(log.c_str() + b + bad.size());
-      pos = b + bad.size();
-    }
-  }
-  return total;
-}
-
-/// Halves every interval whose error estimate exceeds tol.
-std::vector<double> refine(const std::vector<double>& sigma, const Eigen::VectorXd& err, double tol) {
-  std::vector<double> out;
-  for (std::size_t k = 0; k < sigma.size(); ++k) {
-    if (err(static_cast<Eigen::Index>(k)) > tol) {
-      out.push_back(0.5 * sigma[k]);
-      out.push_back(0.5 * sigma[k]);
-    } else {
-      out.push_back(sigma[k]);
-    }
-  }
-  return out;
-}
-
 }  // namespace
 
-const char* to_string(TrajoptStatus s) {
-  switch (s) {
-    case TrajoptStatus::Solved: return "solved";
-    case TrajoptStatus::SolvedAcceptable: return "solved-acceptable";
-    case TrajoptStatus::Infeasible: return "infeasible";
-    case TrajoptStatus::MaxIterations: return "max-iterations";
-    default: return "failed";
+NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const TrajoptOptions& o, bool check_derivatives,
+                   bool warm) {
+  // Quiet runs have no console journal rather than print_level 0, which would also
+  // silence the journals that want the log (output_file, keep_log).
+  Ipopt::SmartPtr<Ipopt::IpoptApplication> app = new Ipopt::IpoptApplication(o.verbose);
+  Ipopt::OptionsList& opts = *app->Options();
+  opts.SetStringValue("sb", "yes");  // no banner
+  opts.SetIntegerValue("print_level", 5);
+  opts.SetNumericValue("tol", o.tol);
+  opts.SetIntegerValue("max_iter", o.max_iter);
+  opts.SetStringValue("hessian_approximation", "exact");
+  opts.SetStringValue("nlp_scaling_method", "gradient-based");
+  opts.SetStringValue("derivative_test", check_derivatives ? o.derivative_test : "none");
+  opts.SetStringValue("derivative_test_print_all", "no");
+  // MUMPS' own row/column scaling misjudges the KKT matrix as singular when boundary
+  // conditions repeat what the dynamics already fix (e.g. R at rest at both ends when no
+  // actuator can push o): Ipopt then fails in its first step. Without it the
+  // regularization copes, and each factorization is ~15% cheaper. Ipopt's
+  // gradient-based NLP scaling stays on.
+  opts.SetIntegerValue("mumps_scaling", 0);
+  // Ipopt's default asks MUMPS for 10x its workspace estimate, and every factorization
+  // then pays for touching it (cost superlinear in N beyond ~400 intervals). Ipopt
+  // raises the value itself if MUMPS runs short.
+  opts.SetIntegerValue("mumps_mem_percent", 20);
+  // Approximate minimum fill keeps the factorization linear in N on these block-banded
+  // KKT systems; MUMPS' automatic choice switches to an ordering that is ~30% slower
+  // above ~10k unknowns (N ~ 800).
+  opts.SetIntegerValue("mumps_pivot_order", 2);
+  if (warm) opts.SetNumericValue("mu_init", 1e-6);  // start close to the central path of a near-optimal point
+  for (const auto& kv : o.ipopt_options) set_user_option(*app, kv.first, kv.second);
+
+  NlpSolve run;
+  Ipopt::ApplicationReturnStatus status = Ipopt::Internal_Error;
+  std::string error;
+  const Ipopt::ApplicationReturnStatus init = app->Initialize("");  // "": no ipopt.opt from the working directory
+  if (init != Ipopt::Solve_Succeeded) {
+    run.status = map_status(init);
+    run.message = describe(init, "Ipopt initialization failed");
+    return run;
   }
-}
-
-Eigen::VectorXd TrajoptResult::control_at(double t_s) const {
-  if (!trajectory) return Eigen::VectorXd::Zero(u.cols());
-  return trajectory->control_at(t_s);
-}
-
-TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& problem, const TrajoptOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  validate(body, problem);
-  validate(options);
-
-  TrajoptResult res;
-  res.transcription = options.transcription;
-  std::vector<double> mesh(static_cast<std::size_t>(options.intervals), 1.0 / options.intervals);
-  InitialGuess guess = options.guess;
-  for (int round = 0;; ++round) {
-    const CollocationNlp nlp(body, problem, options.transcription, mesh);
-    const Eigen::VectorXd w0 = initial_point(nlp, guess);
-    IpoptRun run = run_ipopt(nlp, w0, options, round == 0, round > 0);
-    if (round == 0 && options.derivative_test != "none") res.derivative_test_errors = derivative_errors(run.log);
-    res.log += run.log;
-    res.status = map_status(run.status);
-    res.message = describe(run.status, run.error);
-    res.iterations += run.iterations;
-    res.intervals = nlp.intervals();
-    MeshRound mr;
-    mr.intervals = nlp.intervals();
-    mr.iterations = run.iterations;
-    if (run.w.size() == nlp.num_variables()) {
-      const Eigen::VectorXd& w = run.w;
-      res.objective = nlp.objective(w);
-      res.duration_s = nlp.duration(w);
-      res.max_defect = nlp.max_defect(w);
-      res.trajectory = nlp.trajectory(w);
-      res.max_error_estimate = res.trajectory->interval_errors().maxCoeff();
-      res.t = res.trajectory->knot_times();
-      res.x = res.trajectory->knot_states();
-      res.u = res.trajectory->knot_controls();
-      const int N = nlp.intervals(), nu = nlp.dynamics().nu();
-      if (has_midpoints(options.transcription)) {
-        nlp.midpoints(w, res.x_mid, res.u_mid);
-        res.t_mid.resize(N);
-        for (int k = 0; k < N; ++k) res.t_mid(k) = nlp.mid_fraction(k) * res.duration_s;
-      } else {
-        res.t_mid.resize(0);
-        res.x_mid.resize(0, 6);
-        res.u_mid.resize(0, nu);
-      }
-      mr.objective = res.objective;
-      mr.max_defect = res.max_defect;
-      mr.max_error_estimate = res.max_error_estimate;
-    } else {
-      res.trajectory.reset();
-    }
-    res.rounds.push_back(mr);
-
-    if (!res.success() || !res.trajectory || round >= options.mesh_refinements) break;
-    const Eigen::VectorXd err = res.trajectory->interval_errors();
-    if (err.maxCoeff() <= options.mesh_tolerance) break;
-    std::vector<double> finer = refine(nlp.mesh_fractions(), err, options.mesh_tolerance);
-    if (static_cast<int>(finer.size()) > options.max_intervals) {
-      res.message += "; mesh refinement stopped: " + std::to_string(finer.size()) + " intervals would exceed max_intervals = " +
-                     std::to_string(options.max_intervals);
-      break;
-    }
-    mesh = std::move(finer);
-    guess = InitialGuess{};
-    guess.solution = res.trajectory;
+  const bool derivative_check = check_derivatives && o.derivative_test != "none";
+  if (o.keep_log || derivative_check) {
+    // derivative_errors() reads the checker's verdict from this log, at print level 5 or more
+    const int level = derivative_check ? std::max(o.log_level, int{Ipopt::J_ITERSUMMARY})
+                                       : std::clamp(o.log_level, 0, int{Ipopt::J_ALL});
+    Ipopt::SmartPtr<Ipopt::Journal> j = new StringJournal(static_cast<Ipopt::EJournalLevel>(level), &run.log);
+    app->Jnlst()->AddJournal(j);
   }
-  res.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return res;
+  Ipopt::SmartPtr<CollocationTnlp> tnlp = new CollocationTnlp(nlp, w0);
+  try {
+    status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
+  } catch (const std::exception& e) {  // Ipopt catches its own; this is a last resort
+    status = Ipopt::NonIpopt_Exception_Thrown;
+    error = e.what();
+  }
+  if (Ipopt::IsValid(app->Statistics())) run.iterations = app->Statistics()->IterationCount();
+  if (tnlp->finalized) {
+    run.w = tnlp->w_final;
+    run.objective = tnlp->obj_final;
+  }
+  if (error.empty()) error = tnlp->error;
+  run.status = map_status(status);
+  run.message = describe(status, error);
+  return run;
 }
 
-}  // namespace freeflex
+}  // namespace freeflex::detail

@@ -1,3 +1,4 @@
+// An optimized maneuver flown open loop on the zero-order model (trajopt/replay.hpp).
 #include "freeflex/trajopt/replay.hpp"
 
 #include <stdexcept>
@@ -20,7 +21,7 @@ IntegrationResult replay_open_loop(const FlexibleBody& body, const ManeuverProbl
     const Eigen::VectorXd u = traj.control_at(at);  // the piece's own polynomial at a knot
     for (std::size_t k = 0; k < problem.actuators.size(); ++k)
       commands(problem.actuators[k]) = u(static_cast<Eigen::Index>(k));
-    zero.rhs(x, commands, xd);
+    xd = zero.rhs(x, commands);
     return true;
   };
   const std::vector<double> knots(result.t.data(), result.t.data() + result.t.size());

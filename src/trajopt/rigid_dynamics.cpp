@@ -1,3 +1,5 @@
+// The zero-order rigid dynamics for collocation: f(x, u), its Jacobian and the contracted
+// Hessian in closed form.
 #include "freeflex/trajopt/rigid_dynamics.hpp"
 
 #include <cmath>
@@ -54,21 +56,21 @@ RigidDynamics::RigidDynamics(const FlexibleBody& body, std::vector<int> actuator
   B_.resize(3, nu);
   C_.resize(3, nu);
   const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(body.n());
-  Eigen::VectorXd g(body.dofs());
-  Eigen::MatrixXd d;
   const double half_pi = 0.5 * std::acos(-1.0);
   for (int k = 0; k < nu; ++k) {
     const int e = actuators_[k];
-    body.element_force(e, 0.0, q0, g, &d);
-    const Eigen::Vector3d g0 = g.head<3>(), dg0 = d.block<3, 1>(0, 0);
-    body.element_force(e, half_pi, q0, g);
-    C_.col(k) = dg0;                       // g'(0) = C
-    A_.col(k) = g.head<3>() - C_.col(k);   // g(π/2) = A + C
-    B_.col(k) = g0 - A_.col(k);            // g(0) = A + B
+    const FlexibleBody::ForceDerivative at0 = body.element_force_derivative(e, 0.0, q0);
+    const Eigen::Vector3d g0 = at0.value.head<3>(), dg0 = at0.derivative.block<3, 1>(0, 0);
+    const Eigen::VectorXd g_half = body.element_force(e, half_pi, q0);
+    C_.col(k) = dg0;                            // g'(0) = C
+    A_.col(k) = g_half.head<3>() - C_.col(k);   // g(π/2) = A + C
+    B_.col(k) = g0 - A_.col(k);                 // g(0) = A + B
     // The trigonometric form is exact for every element type at q = 0; check it anyway
     // so that a new element model cannot silently break the optimizer's derivatives.
     const double th = 1.234;
-    body.element_force(e, th, q0, g, &d);
+    const FlexibleBody::ForceDerivative at_th = body.element_force_derivative(e, th, q0);
+    const Eigen::VectorXd& g = at_th.value;
+    const Eigen::MatrixXd& d = at_th.derivative;
     const Eigen::Vector3d model = A_.col(k) + B_.col(k) * std::cos(th) + C_.col(k) * std::sin(th);
     const Eigen::Vector3d dmodel = -B_.col(k) * std::sin(th) + C_.col(k) * std::cos(th);
     const double scale = 1.0 + g.head<3>().cwiseAbs().maxCoeff();
@@ -92,8 +94,16 @@ Eigen::Vector3d RigidDynamics::actuator_force(int k, double theta) const {
   return A_.col(k) + B_.col(k) * std::cos(theta) + C_.col(k) * std::sin(theta);
 }
 
-void RigidDynamics::eval(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& u,
-                         Eigen::Ref<Eigen::VectorXd> f) const {
+RigidDynamics::Data RigidDynamics::create_data() const {
+  Data d;
+  d.J.setZero(nx, nz());
+  d.H.setZero(nz(), nz());
+  return d;
+}
+
+RigidDynamics::Vector6d RigidDynamics::eval(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                            const Eigen::Ref<const Eigen::VectorXd>& u) const {
+  Vector6d f;
   const Angle a(x(2), m_, S_, D_);
   const double om = x(5);
   const Eigen::Vector3d G = A_ * u + (B_ * u) * a.c + (C_ * u) * a.s;
@@ -101,17 +111,14 @@ void RigidDynamics::eval(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen
   f.head<3>() = x.tail<3>();
   f.segment<2>(3) = (G.head<2>() + om * om * a.p - a.b * phi) / m_;
   f(5) = phi;
-}
-
-RigidDynamics::Vector6d RigidDynamics::eval(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                            const Eigen::Ref<const Eigen::VectorXd>& u) const {
-  Vector6d f;
-  eval(x, u, f);
   return f;
 }
 
-void RigidDynamics::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& u,
-                             Eigen::Ref<Eigen::VectorXd> f, Eigen::Ref<Eigen::MatrixXd> J) const {
+void RigidDynamics::calc_diff(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+                              const Eigen::Ref<const Eigen::VectorXd>& u) const {
+  Vector6d& f = data.f;
+  Eigen::MatrixXd& J = data.J;
+  J.resize(nx, nz());
   const Angle a(x(2), m_, S_, D_);
   const double om = x(5);
   const Eigen::Vector3d Bu = B_ * u, Cu = C_ * u;
@@ -137,10 +144,11 @@ void RigidDynamics::jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const E
   }
 }
 
-void RigidDynamics::hessian_contraction(const Eigen::Ref<const Eigen::VectorXd>& x,
-                                        const Eigen::Ref<const Eigen::VectorXd>& u,
-                                        const Eigen::Ref<const Eigen::VectorXd>& lambda,
-                                        Eigen::Ref<Eigen::MatrixXd> H) const {
+const Eigen::MatrixXd& RigidDynamics::calc_hessian(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                   const Eigen::Ref<const Eigen::VectorXd>& u,
+                                                   const Eigen::Ref<const Eigen::VectorXd>& lambda) const {
+  Eigen::MatrixXd& H = data.H;
+  H.resize(nz(), nz());
   // f(0:2) = x(3:5) is linear: only the multipliers of a_R and θ'' contribute.
   const Angle a(x(2), m_, S_, D_);
   const double om = x(5);
@@ -167,6 +175,7 @@ void RigidDynamics::hessian_contraction(const Eigen::Ref<const Eigen::VectorXd>&
     const Eigen::Vector2d aR_tu = (gtk.head<2>() + a.p * phi_u - a.b * phi_tu) / m_;
     H(nx + k, 2) = H(2, nx + k) = lR.dot(aR_tu) + lt * phi_tu;
   }
+  return H;
 }
 
 }  // namespace freeflex

@@ -1,3 +1,5 @@
+// The continuous trajectory a collocation solution stands for: Hermite states, piecewise
+// controls, and the interval error estimates of mesh refinement.
 #include "freeflex/trajopt/trajectory.hpp"
 
 #include <algorithm>

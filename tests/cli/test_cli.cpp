@@ -45,7 +45,10 @@ TEST_CASE("modes --format csv has the documented header and ascending frequencie
   }
   CHECK(rows == 6);
   CHECK(run_cli("modes " + design + " --noa 10 --format csv").output.find("\n10,") != std::string::npos);
-  CHECK_THAT(run_cli("modes " + design + " --format json").output, Contains("\"lambda\": [4.73"));
+  const std::string json = run_cli("modes " + design + " --format json").output;
+  const auto lambda = json.find("\"lambda\": [");  // the first elastic root, 4.7300...
+  REQUIRE(lambda != std::string::npos);
+  CHECK(json.find_first_not_of(" \n", lambda + 11) == json.find("4.73", lambda));
 }
 
 TEST_CASE("bad input exits 2 with the key and line, and writes nothing", "[cli]") {
@@ -157,6 +160,39 @@ TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajec
   CHECK(!exists(out + "/trajectory.csv"));
   CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"failed\""));
   CHECK_THAT(read(out + "/summary.json"), Contains("\"status\": \"infeasible\""));
+}
+
+TEST_CASE("a failure's reason is printed on stderr and in summary.json, also with --quiet", "[cli][trajopt]") {
+  const std::string design = write_temp("unreachable_quiet",
+                                        kBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n"
+                                                "limit = 0.01\n[maneuver]\nactuators = [\"hub\"]\nduration_s = 0.5\n"
+                                                "intervals = 20\nquiet = true\n[maneuver.final]\ntheta_deg = 3000.0\n");
+  const std::string out = temp_path("unreachable_quiet_out");
+  const CliResult stderr_only = run_cli("run " + design + " --out " + out + " --quiet", "2>&1 1>/dev/null");
+  INFO(stderr_only.output);
+  CHECK(stderr_only.exit_code == 1);
+  CHECK_THAT(stderr_only.output, Contains("freeflex: failed: maneuver optimization did not succeed (infeasible)"));
+  const CliResult stdout_only = run_cli("run " + design + " --out " + out + " --quiet", "2>/dev/null");
+  CHECK(stdout_only.output.empty());  // quiet: nothing on stdout
+  const std::string summary = read(out + "/summary.json");
+  CHECK_THAT(summary, Contains("\"message\": \"maneuver optimization did not succeed (infeasible)"));
+}
+
+TEST_CASE("per-command help, results on stdout, warnings and errors on stderr", "[cli]") {
+  for (const char* command : {"run", "modes"}) {
+    const CliResult help = run_cli(std::string(command) + " --help", "2>/dev/null");
+    INFO(help.output);
+    CHECK(help.exit_code == 0);
+    CHECK_THAT(help.output, Contains("DESIGN"));
+  }
+  CHECK_THAT(run_cli("run --help", "2>/dev/null").output, Contains("--out"));
+  CHECK_THAT(run_cli("modes --help", "2>/dev/null").output, Contains("--format"));
+  const std::string design = write_temp("modes_streams", kBeam);
+  CHECK_THAT(run_cli("modes " + design, "2>/dev/null").output, Contains("elastic modes of"));  // stdout
+  const CliResult bad = run_cli("modes " + design + " --noa 0", "2>&1 1>/dev/null");            // stderr
+  CHECK(bad.exit_code == 2);
+  CHECK_THAT(bad.output, Contains("--noa 0: must be a whole number in [1, 100]"));
+  CHECK(run_cli("--version", "2>/dev/null").output.rfind("freeflex ", 0) == 0);
 }
 
 TEST_CASE("Ipopt's output_file lands in the output directory with the other results", "[cli][trajopt]") {

@@ -54,34 +54,29 @@ TEST_CASE("TV-LQR rejects bad weights, an empty horizon and one shorter than the
   const TwoSecondManeuver nominal;
   const FirstOrderModel model(body, nominal, zero(), {0, 1});
   const int nx = model.state_size();
-  TvlqrOptions o;
-  o.t0 = 0.0;
-  o.tf = 3.0;
-  o.Q = Eigen::MatrixXd::Identity(nx, nx);
-  o.R = Eigen::MatrixXd::Identity(2, 2);
+  const Eigen::MatrixXd Q = Eigen::MatrixXd::Identity(nx, nx), R = Eigen::MatrixXd::Identity(2, 2);
+  const TvlqrOptions o;
 
+  Eigen::MatrixXd bad_Q = Q;
+  bad_Q(4, 4) = -0.3;
+  CHECK_THROWS_WITH(solve_tvlqr(model, 0.0, 3.0, bad_Q, R, o),
+                    Contains("tvlqr: Q must be positive semidefinite: smallest eigenvalue -0.3"));
+  Eigen::MatrixXd bad_R = R;
+  bad_R(1, 1) = -2.0;
+  CHECK_THROWS_WITH(solve_tvlqr(model, 0.0, 3.0, Q, bad_R, o),
+                    Contains("tvlqr: R must be positive definite: smallest eigenvalue -2"));
   TvlqrOptions bad = o;
-  bad.Q(4, 4) = -0.3;
-  CHECK_THROWS_WITH(solve_tvlqr(model, bad), Contains("tvlqr: Q must be positive semidefinite: smallest eigenvalue -0.3"));
-  bad = o;
-  bad.R(1, 1) = -2.0;
-  CHECK_THROWS_WITH(solve_tvlqr(model, bad), Contains("tvlqr: R must be positive definite: smallest eigenvalue -2"));
-  bad = o;
   bad.Qf = -Eigen::MatrixXd::Identity(nx, nx);
-  CHECK_THROWS_WITH(solve_tvlqr(model, bad), Contains("Qf must be positive semidefinite"));
-  bad = o;
-  bad.R = Eigen::MatrixXd::Identity(3, 3);
-  CHECK_THROWS_WITH(solve_tvlqr(model, bad), Contains("R must be 2 x 2, got 3 x 3"));
-  bad = o;
-  bad.tf = 1.5;  // the maneuver ends at 2 s
-  CHECK_THROWS_WITH(solve_tvlqr(model, bad), Contains("tf = 1.5 s ends before the nominal maneuver does (2 s)"));
-  bad = o;
-  bad.t0 = 3.0;
-  bad.tf = 3.0;
-  CHECK_THROWS_WITH(solve_tvlqr(model, bad), Contains("tf = 3 must be > t0 = 3"));
+  CHECK_THROWS_WITH(solve_tvlqr(model, 0.0, 3.0, Q, R, bad), Contains("Qf must be positive semidefinite"));
+  CHECK_THROWS_WITH(solve_tvlqr(model, 0.0, 3.0, Q, Eigen::MatrixXd::Identity(3, 3), o),
+                    Contains("R must be 2 x 2, got 3 x 3"));
+  // the maneuver ends at 2 s
+  CHECK_THROWS_WITH(solve_tvlqr(model, 0.0, 1.5, Q, R, o),
+                    Contains("tf = 1.5 s ends before the nominal maneuver does (2 s)"));
+  CHECK_THROWS_WITH(solve_tvlqr(model, 3.0, 3.0, Q, R, o), Contains("tf = 3 must be > t0 = 3"));
   bad = o;
   bad.grid_step_s = 0.0;
-  CHECK_THROWS_WITH(solve_tvlqr(model, bad), Contains("grid_step_s"));
+  CHECK_THROWS_WITH(solve_tvlqr(model, 0.0, 3.0, Q, R, bad), Contains("grid_step_s"));
 }
 
 TEST_CASE("actuators that are not in the model are rejected", "[control]") {
@@ -93,18 +88,14 @@ TEST_CASE("actuators that are not in the model are rejected", "[control]") {
   const Excitation load_on_actuator{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 1.0}, {1.0}), std::nullopt}};
   CHECK_THROWS_WITH(nominal_element_commands(load_on_actuator, {0}), Contains("must not have a load profile"));
 
-  SwitchTimeOptions so;
-  so.actuator = 5;
-  CHECK_THROWS_WITH(design_switch_times(body, so), Contains("actuator = 5 is not an element of the body (0..1)"));
-  so.actuator = 1;  // a thruster
-  CHECK_THROWS_WITH(design_switch_times(body, so), Contains("must be a torque"));
-  so.actuator = 0;
-  so.rotation_rad = -1.0;
-  CHECK_THROWS_WITH(design_switch_times(body, so), Contains("rotation_rad = -1"));
+  // design_switch_times(body, actuator, rotation_rad, torque_limit_Nm, modes)
+  CHECK_THROWS_WITH(design_switch_times(body, 5, 3.0, 1.0, 1),
+                    Contains("actuator = 5 is not an element of the body (0..1)"));
+  CHECK_THROWS_WITH(design_switch_times(body, 1, 3.0, 1.0, 1), Contains("must be a torque"));  // a thruster
+  CHECK_THROWS_WITH(design_switch_times(body, 0, -1.0, 1.0, 1), Contains("rotation_rad = -1"));
   const FlexibleBody off_centre(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), 2,
                                 {{"tau", ForceElement::Type::Torque, 0.3, {0.0, 0.0}, false}});
-  so.rotation_rad = 1.0;
-  CHECK_THROWS_WITH(design_switch_times(off_centre, so), Contains("must act at o"));
+  CHECK_THROWS_WITH(design_switch_times(off_centre, 0, 1.0, 1.0, 1), Contains("must act at o"));
 }
 
 TEST_CASE("closed loop, weights and metrics validate sizes", "[control]") {
@@ -115,11 +106,9 @@ TEST_CASE("closed loop, weights and metrics validate sizes", "[control]") {
   CHECK_THROWS_WITH(simulate_closed_loop_first_order(model, unsolved, {}, ClosedLoopOptions{}),
                     Contains("was not solved"));
   TvlqrOptions o;
-  o.tf = 2.0;
-  o.Q = vibration_weight(body, 1.0, 1.0, 1.0);
-  o.R = Eigen::MatrixXd::Identity(2, 2);
   o.grid_step_s = 0.5;
-  const TvlqrResult law = solve_tvlqr(model, o);
+  const TvlqrResult law =
+      solve_tvlqr(model, 0.0, 2.0, vibration_weight(body, 1.0, 1.0, 1.0), Eigen::MatrixXd::Identity(2, 2), o);
   REQUIRE(law.ok());
   ClosedLoopOptions co;
   co.limits = Eigen::Vector3d(1.0, 1.0, 1.0);

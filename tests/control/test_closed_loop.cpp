@@ -45,8 +45,8 @@ TEST_CASE("TV-LQR on the moment example: residual vibration cut on the LTV and t
   so.integrator.atol = 1e-11;
   const PerturbationResult pert = simulate_perturbation(body, loads, so);
   const SimulationResult open = simulate_full(body, loads, so);
-  REQUIRE(pert.total.ok);
-  REQUIRE(open.ok);
+  REQUIRE(pert.total.ok());
+  REQUIRE(open.ok());
   MetricTargets target;
   target.theta_target = 3.0;  // θ0(1 s) = 3 rad, at rest after
   const ResponseMetrics m_open_full = response_metrics(body, open.t, open.z, open.z_dot, Eigen::MatrixXd(), target);
@@ -58,12 +58,8 @@ TEST_CASE("TV-LQR on the moment example: residual vibration cut on the LTV and t
   // Limits 1 N m (torque) and 2 N (thrusters); Bryson-scaled R = diag(1/limit²);
   // Q weights twice the elastic energy, rigid errors 10 per m² or rad², rates 1.
   const Eigen::Vector3d limits(1.0, 2.0, 2.0);
-  TvlqrOptions o;
-  o.t0 = 0.0;
-  o.tf = 3.0;
-  o.Q = vibration_weight(body, 1.0, 10.0, 1.0);
-  o.R = limits.cwiseInverse().cwiseAbs2().asDiagonal();
-  const TvlqrResult law = solve_tvlqr(model, o);
+  const Eigen::MatrixXd R = limits.cwiseInverse().cwiseAbs2().asDiagonal();
+  const TvlqrResult law = solve_tvlqr(model, 0.0, 3.0, vibration_weight(body, 1.0, 10.0, 1.0), R);
   REQUIRE(law.ok());
   REQUIRE(law.terminal_care);
   CHECK(law.terminal_care->uncontrollable_dimension == 2);  // the axial translation
@@ -74,8 +70,8 @@ TEST_CASE("TV-LQR on the moment example: residual vibration cut on the LTV and t
   co.integrator.atol = 1e-11;
   const ClosedLoopResult ltv = simulate_closed_loop_first_order(model, law, {}, co);
   const ClosedLoopResult full = simulate_closed_loop_full(model, loads, {}, law, co);
-  REQUIRE(ltv.ok);
-  REQUIRE(full.ok);
+  REQUIRE(ltv.ok());
+  REQUIRE(full.ok());
   const ResponseMetrics m_ltv = response_metrics(body, ltv.t, ltv.z, ltv.z_dot, ltv.commands, target);
   const ResponseMetrics m_full = response_metrics(body, full.t, full.z, full.z_dot, full.commands, target);
 
@@ -169,6 +165,7 @@ struct AgreementCase {
   Excitation loads = moment_loads();
   PerturbationResult pert;
   std::unique_ptr<FirstOrderModel> model;
+  Eigen::MatrixXd Q, R;
   TvlqrOptions options;
   AgreementCase() {
     SimulationOptions so;
@@ -177,9 +174,8 @@ struct AgreementCase {
     pert = simulate_perturbation(body, loads, so);
     const std::vector<int> inputs{1, 2, 3};
     model = std::make_unique<FirstOrderModel>(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
-    options.tf = 3.0;
-    options.Q = vibration_weight(body, 1.0, 10.0, 1.0);
-    options.R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
+    Q = vibration_weight(body, 1.0, 10.0, 1.0);
+    R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
     options.rtol = 1e-10;
     options.atol = 1e-12;
     options.grid_step_s = 0.05;
@@ -208,11 +204,11 @@ void check_same_law(const TvlqrResult& a, const TvlqrResult& b) {
 
 TEST_CASE("TV-LQR Newton solvers agree: exact frozen Lyapunov solve and preconditioned GMRES", "[control]") {
   const AgreementCase c;
-  REQUIRE(c.pert.total.ok);
+  REQUIRE(c.pert.total.ok());
   TvlqrOptions o = c.options;
-  const TvlqrResult direct = solve_tvlqr(*c.model, o);
+  const TvlqrResult direct = solve_tvlqr(*c.model, 0.0, 3.0, c.Q, c.R, o);
   o.newton_solver = TvlqrOptions::NewtonSolver::Gmres;
-  const TvlqrResult gmres = solve_tvlqr(*c.model, o);
+  const TvlqrResult gmres = solve_tvlqr(*c.model, 0.0, 3.0, c.Q, c.R, o);
   CHECK(gmres.linear_iterations > 0);
   CHECK(direct.linear_iterations == 0);
   check_same_law(direct, gmres);
@@ -221,11 +217,11 @@ TEST_CASE("TV-LQR Newton solvers agree: exact frozen Lyapunov solve and precondi
 TEST_CASE("TV-LQR Newton solves: block-diagonal (modal) and Schur forms of the frozen closed loop agree",
           "[control]") {
   const AgreementCase c;
-  REQUIRE(c.pert.total.ok);
+  REQUIRE(c.pert.total.ok());
   TvlqrOptions o = c.options;
-  const TvlqrResult modal = solve_tvlqr(*c.model, o);  // default: modal_max_condition = 1e6
+  const TvlqrResult modal = solve_tvlqr(*c.model, 0.0, 3.0, c.Q, c.R, o);  // default: modal_max_condition = 1e6
   o.modal_max_condition = 0.0;
-  const TvlqrResult schur = solve_tvlqr(*c.model, o);
+  const TvlqrResult schur = solve_tvlqr(*c.model, 0.0, 3.0, c.Q, c.R, o);
   CHECK(schur.modal_setups == 0);
   // κ(V) ~ 1e3..1e4 at most refreshes; a few fall back to the Schur form (κ > 1e6)
   CHECK(modal.modal_setups > modal.preconditioner_setups / 2);

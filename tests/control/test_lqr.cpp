@@ -11,6 +11,7 @@
 #include <random>
 
 #include "freeflex/control/lqr.hpp"
+#include "control/lyapunov_solvers.hpp"
 #include "freeflex/control/lyapunov.hpp"
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/sim/integrator.hpp"
@@ -267,23 +268,18 @@ TEST_CASE("TV-LQR: scalar Riccati closed form", "[control]") {
   LtvSystem sys;
   sys.state_size = 1;
   sys.input_size = 1;
-  sys.state_space = [&](const Instant&, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g) {
-    A = Eigen::MatrixXd::Constant(1, 1, a);
-    B = Eigen::MatrixXd::Constant(1, 1, b);
-    g = Eigen::VectorXd::Zero(1);
+  sys.state_space = [&](const Instant&) {
+    return StateSpace{Eigen::MatrixXd::Constant(1, 1, a), Eigen::MatrixXd::Constant(1, 1, b), Eigen::VectorXd::Zero(1)};
   };
   TvlqrOptions o;
-  o.t0 = 0.0;
-  o.tf = T;
-  o.Q = Eigen::MatrixXd::Constant(1, 1, q);
-  o.R = Eigen::MatrixXd::Constant(1, 1, r);
   o.Qf = Eigen::MatrixXd::Constant(1, 1, pf);
   o.rtol = 1e-11;
   o.atol = 1e-13;
   o.store_riccati = true;
   std::vector<double> swept;  // progress: tf - t at each stored grid time, t from tf down to t0
   o.progress = [&swept](double covered) { swept.push_back(covered); };
-  const TvlqrResult res = solve_tvlqr(sys, o);
+  const TvlqrResult res =
+      solve_tvlqr(sys, 0.0, T, Eigen::MatrixXd::Constant(1, 1, q), Eigen::MatrixXd::Constant(1, 1, r), o);
   REQUIRE(res.ok());
   REQUIRE(swept.size() + 1 == res.t.size());  // every grid time but tf itself, which needs no step
   CHECK(std::is_sorted(swept.begin(), swept.end()));
@@ -311,26 +307,25 @@ TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value, p
   sys.state_size = 2;
   sys.input_size = 1;
   sys.breakpoints = {0.8};
-  auto model = [](const Instant& at, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g) {
+  auto model = [](const Instant& at) {
     const double t = at.t;
-    A.resize(2, 2);
-    A << 0.0, 1.0, -4.0 - std::sin(3.0 * t), -0.1;
-    B.resize(2, 1);
-    B << 0.0, 1.0 + 0.3 * std::cos(2.0 * t);
-    g.resize(2);
-    g << 0.0, at.piece_mid < 0.8 ? 2.0 : -1.0;
+    StateSpace m;
+    m.A.resize(2, 2);
+    m.A << 0.0, 1.0, -4.0 - std::sin(3.0 * t), -0.1;
+    m.B.resize(2, 1);
+    m.B << 0.0, 1.0 + 0.3 * std::cos(2.0 * t);
+    m.g.resize(2);
+    m.g << 0.0, at.piece_mid < 0.8 ? 2.0 : -1.0;
+    return m;
   };
   sys.state_space = model;
+  const Eigen::MatrixXd Q = Eigen::Matrix2d::Identity() * 3.0, R = Eigen::MatrixXd::Constant(1, 1, 0.2);
   TvlqrOptions o;
-  o.t0 = 0.0;
-  o.tf = 2.0;
-  o.Q = Eigen::Matrix2d::Identity() * 3.0;
-  o.R = Eigen::MatrixXd::Constant(1, 1, 0.2);
   o.Qf = Eigen::Matrix2d::Identity() * 5.0;
   o.rtol = 1e-10;
   o.atol = 1e-12;
   o.grid_step_s = 5e-4;
-  const TvlqrResult law = solve_tvlqr(sys, o);
+  const TvlqrResult law = solve_tvlqr(sys, 0.0, 2.0, Q, R, o);
   REQUIRE(law.ok());
   const Eigen::Vector2d x0(0.4, -0.3);
 
@@ -339,14 +334,12 @@ TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value, p
     OdeSystem ode;
     ode.dim = 3;
     ode.rhs = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& z, Eigen::Ref<Eigen::VectorXd> zd) {
-      Eigen::MatrixXd A, B;
-      Eigen::VectorXd g;
-      model(at, A, B, g);
+      const StateSpace m = model(at);
       const Eigen::Vector2d x = z.head<2>();
       Eigen::VectorXd u = law.control(at.t, x);
       u(0) += eps * std::sin(5.0 * at.t);
-      zd.head<2>() = A * x + B * u + g;
-      zd(2) = x.dot(o.Q * x) + u.dot(o.R * u);
+      zd.head<2>() = m.A * x + m.B * u + m.g;
+      zd(2) = x.dot(Q * x) + u.dot(R * u);
       return true;
     };
     IntegratorOptions io;
@@ -354,7 +347,7 @@ TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value, p
     io.atol = 1e-13;
     Eigen::Vector3d z0(x0(0), x0(1), 0.0);
     const IntegrationResult ir = integrate(ode, z0, {0.0, 2.0}, {0.8}, io);
-    REQUIRE(ir.ok);
+    REQUIRE(ir.ok());
     const Eigen::Vector2d xf = ir.x.row(1).head<2>().transpose();
     return ir.x(1, 2) + xf.dot(*o.Qf * xf);
   };
@@ -372,9 +365,8 @@ TEST_CASE("TV-LQR on the beam at rest converges to the steady-state LQR gain", "
   const FirstOrderModel model(body, rest, no_commands(), {0, 1, 2});
   const Eigen::MatrixXd Q = vibration_weight(body, 1.0, 100.0, 10.0);
   const Eigen::MatrixXd R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
-  Eigen::MatrixXd A, B;
-  Eigen::VectorXd g;
-  model.state_space(Instant::at(0.0), A, B, g);
+  const StateSpace ss = model.state_space(Instant::at(0.0));
+  const Eigen::MatrixXd &A = ss.A, &B = ss.B;
 
   // Body-y thrusters and a torque cannot push the beam along its axis: that double
   // integrator is uncontrollable, so the CARE has no stabilizing solution ...
@@ -392,15 +384,11 @@ TEST_CASE("TV-LQR on the beam at rest converges to the steady-state LQR gain", "
   CHECK(care.residual < 1e-9);  // the brief's bound
 
   TvlqrOptions o;
-  o.t0 = 0.0;
-  o.tf = 25.0;
-  o.Q = Q;
-  o.R = R;
   o.Qf = Eigen::MatrixXd::Zero(Q.rows(), Q.cols());  // far from the CARE solution: convergence must happen
   o.rtol = 1e-10;
   o.atol = 1e-12;
   o.grid_step_s = 0.5;
-  const TvlqrResult law = solve_tvlqr(model, o);
+  const TvlqrResult law = solve_tvlqr(model, 0.0, 25.0, Q, R, o);
   REQUIRE(law.ok());
   const double err0 = (law.K.front() - care.K).norm() / care.K.norm();
   const double err_end = (law.K.back() - care.K).norm() / care.K.norm();

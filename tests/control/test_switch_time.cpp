@@ -24,19 +24,15 @@ TEST_CASE("switch-time design: k = 1, 2 modes at rest in the first-order model",
 
   // The rigid bang-bang (one switch) leaves the first antisymmetric mode ringing.
   const BangBangResidual rigid = bang_bang_residual(body, 0, 1.0, {0.5}, 1.0, 2, 1e-11, 1e-14);
-  REQUIRE(rigid.ok);
+  REQUIRE(rigid.ok());
   const double rigid_ratio = rigid.energy_J.sum() / rigid.rigid_kinetic_peak_J;
   std::cout << "[control] rigid bang-bang T* = " << Tstar << " s: residual of the first 2 excited modes "
             << rigid_ratio << " of the rigid kinetic peak " << rigid.rigid_kinetic_peak_J << " J\n";
   CHECK(rigid_ratio > 1e-4);  // so that the designs below have something to remove
 
   for (int k : {1, 2}) {
-    SwitchTimeOptions o;
-    o.actuator = 0;
-    o.modes = k;
-    o.rotation_rad = 3.0;
-    o.torque_limit_Nm = 1.0;
-    const SwitchTimeResult r = design_switch_times(body, o);
+    // the torque (element 0) turns the beam by 3 rad with |τ| <= 1 N m
+    const SwitchTimeResult r = design_switch_times(body, 0, 3.0, 1.0, k);
     INFO(r.message);
     REQUIRE(r.ok());
     std::cout << "[control] k = " << k << ": T = " << r.duration_s << " s (T* = " << r.rigid_duration_s
@@ -52,7 +48,7 @@ TEST_CASE("switch-time design: k = 1, 2 modes at rest in the first-order model",
     CHECK(std::abs(r.final_rate_rad_s) < 1e-12);  // the rest constraint, solved to round-off (measured 9e-16)
     // An independent run at tighter tolerance agrees.
     const BangBangResidual check = bang_bang_residual(body, 0, 1.0, r.switch_times, r.duration_s, k, 1e-12, 1e-15);
-    REQUIRE(check.ok);
+    REQUIRE(check.ok());
     const double ratio = check.energy_J.sum() / check.rigid_kinetic_peak_J;
     INFO("re-simulated ratio " << ratio);
     CHECK(ratio < 1e-9);  // the brief's acceptance, on the independent run
@@ -79,13 +75,11 @@ TEST_CASE("ZV and ZVD shapers cancel a single mode", "[control]") {
 
 TEST_CASE("switch-time design: SLSQP refinement reaches Newton's design (k = 1)", "[control]") {
   const FlexibleBody body = torque_beam();
-  SwitchTimeOptions o;
-  o.actuator = 0;
-  o.modes = 1;
-  const SwitchTimeResult newton = design_switch_times(body, o);
+  SwitchTimeOptions o;  // the defaults' problem: 3 rad with |τ| <= 1 N m by element 0
+  const SwitchTimeResult newton = design_switch_times(body, 0, 3.0, 1.0, 1, o);
   o.refine = SwitchTimeOptions::Refine::Slsqp;
   o.max_evaluations = 40;
-  const SwitchTimeResult slsqp = design_switch_times(body, o);
+  const SwitchTimeResult slsqp = design_switch_times(body, 0, 3.0, 1.0, 1, o);
   REQUIRE(newton.ok());
   INFO(slsqp.message);
   REQUIRE(slsqp.ok());

@@ -53,9 +53,8 @@ TEST_CASE("first-order A(t), B(t) match central differences of the full model", 
     const FixedTrajectory traj(s);
     const FirstOrderModel fo(body, traj, [&](const Instant&, Eigen::Ref<Eigen::VectorXd> u) { u = u0; }, {0, 1, 2, 3});
     const Instant at = Instant::at(0.37 * trial);
-    Eigen::MatrixXd A, B;
-    Eigen::VectorXd g;
-    fo.state_space(at, A, B, g);
+    const StateSpace ss = fo.state_space(at);
+    const Eigen::MatrixXd &A = ss.A, &B = ss.B;
 
     Eigen::VectorXd z = Eigen::VectorXd::Zero(N), zd = z, zdd = z;
     z.head<3>() = s.pos;
@@ -79,8 +78,7 @@ TEST_CASE("first-order A(t), B(t) match central differences of the full model", 
     A_fd.bottomLeftCorner(N, N) = llt.solve(-dz);
     A_fd.bottomRightCorner(N, N) = llt.solve(-dzd);
     B_fd.bottomRows(N) = llt.solve(du);
-    FirstOrderModel::Implicit imp;
-    fo.implicit_form(at, imp);
+    const FirstOrderModel::Implicit imp = fo.implicit_form(at);
     const Eigen::VectorXd r0_direct = -full.residual(z, zd, zdd, u0);
     INFO("trial " << trial << ": A rel err " << max_rel(A, A_fd) << ", B rel err " << max_rel(B, B_fd));
     CHECK(max_rel(A, A_fd) < 1e-6);  // the issue's bound; the FD error here is 4e-8 (A), 8e-8 (B)
@@ -100,19 +98,13 @@ TEST_CASE("element forces: derivatives against central differences away from q =
     Eigen::VectorXd q(n);
     for (int i = 0; i < n; ++i) q(i) = 0.05 * U(rng);
     for (int e = 0; e < 4; ++e) {
-      Eigen::VectorXd g(N), gp(N), gm(N);
-      Eigen::MatrixXd d;
-      body.element_force(e, th, q, g, &d);
+      const Eigen::MatrixXd d = body.element_force_derivative(e, th, q).derivative;
       Eigen::MatrixXd d_fd(N, 1 + n);
       const double h = 1e-6;  // central differences of smooth trigonometric terms
-      body.element_force(e, th + h, q, gp);
-      body.element_force(e, th - h, q, gm);
-      d_fd.col(0) = (gp - gm) / (2 * h);
+      d_fd.col(0) = (body.element_force(e, th + h, q) - body.element_force(e, th - h, q)) / (2 * h);
       for (int j = 0; j < n; ++j) {
         const Eigen::VectorXd dq = Eigen::VectorXd::Unit(n, j) * h;
-        body.element_force(e, th, q + dq, gp);
-        body.element_force(e, th, q - dq, gm);
-        d_fd.col(1 + j) = (gp - gm) / (2 * h);
+        d_fd.col(1 + j) = (body.element_force(e, th, q + dq) - body.element_force(e, th, q - dq)) / (2 * h);
       }
       INFO("element " << e << " trial " << trial);
       // central differences: h² f''' ~ 1e-12 truncation, eps/h ~ 1e-10 round-off (measured 2e-10)
@@ -144,9 +136,10 @@ TEST_CASE("full model: rhs solves the residual, damping leaves rigid motion alon
   const FullModel full(body);
   auto data = full.create_data();
   const int N = body.dofs();
-  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(2 * N, -0.3, 0.4), xd(2 * N), u(4);
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(2 * N, -0.3, 0.4), u(4);
   u << 0.5, 0.1, -0.3, 0.2;
-  REQUIRE(full.rhs(data, x, u, xd));
+  REQUIRE(full.rhs(data, x, u));
+  const Eigen::VectorXd& xd = data.x_dot;
   const double res = full.residual(x.head(N), x.tail(N), xd.tail(N), u).cwiseAbs().maxCoeff();
   const double scale = (body.integrals().K * x.segment(3, body.n())).cwiseAbs().maxCoeff();
   INFO("residual " << res << " against stiffness forces of " << scale);
@@ -158,7 +151,7 @@ TEST_CASE("full model: rhs solves the residual, damping leaves rigid motion alon
   for (int trial = 0; trial < 10; ++trial) {
     for (int i = 0; i < 2 * N; ++i) x(i) = U(rng);
     x(2) *= 4.0;  // θ across the circle
-    REQUIRE(full.rhs(data, x, u, xd));
+    REQUIRE(full.rhs(data, x, u));
     const Eigen::VectorXd r = full.residual(x.head(N), x.tail(N), xd.tail(N), u);
     const double sc = (body.integrals().K * x.segment(3, body.n())).cwiseAbs().maxCoeff();
     INFO("trial " << trial << ": residual " << r.cwiseAbs().maxCoeff() << " against " << sc);
@@ -179,17 +172,17 @@ TEST_CASE("first-order rhs (term by term) equals A x1 + B u1 + g", "[dynamics]")
     s.pos = Eigen::Vector3d(U(rng), U(rng), 3.0 * U(rng));
     s.vel = Eigen::Vector3d(U(rng), U(rng), 4.0 * U(rng));
     s.acc = Eigen::Vector3d(U(rng), U(rng), 5.0 * U(rng));
-    Eigen::VectorXd u0(ne), u1(3), x1(2 * N), fast(2 * N);
+    Eigen::VectorXd u0(ne), u1(3), x1(2 * N);
     for (int e = 0; e < ne; ++e) u0(e) = U(rng);
     for (int k = 0; k < 3; ++k) u1(k) = U(rng);
     for (int i = 0; i < 2 * N; ++i) x1(i) = 0.1 * U(rng);
     const FixedTrajectory traj(s);
     const FirstOrderModel fo(body, traj, [&](const Instant&, Eigen::Ref<Eigen::VectorXd> u) { u = u0; }, {1, 2, 3});
-    Eigen::MatrixXd A, B;
-    Eigen::VectorXd g;
-    fo.state_space(Instant::at(0.0), A, B, g);
-    fo.rhs(Instant::at(0.0), x1, u1, fast);
-    const Eigen::VectorXd slow = A * x1 + B * u1 + g;
+    FirstOrderModel::Data data = fo.create_data();
+    const StateSpace ss = fo.state_space(data, Instant::at(0.0));
+    const Eigen::MatrixXd& A = ss.A;
+    const Eigen::VectorXd fast = fo.rhs(data, Instant::at(0.0), x1, u1);
+    const Eigen::VectorXd slow = A * x1 + ss.B * u1 + ss.g;
     // two evaluation orders of the same sums: round-off relative to the largest term
     CHECK((fast - slow).cwiseAbs().maxCoeff() < 1e-11 * (A.cwiseAbs() * x1.cwiseAbs()).maxCoeff());
   }

@@ -40,8 +40,8 @@ TEST_CASE("paper force example: plane motion, mass centre, perturbation = full",
   opt.integrator.atol = 1e-14;  // coordinates that stay at zero are held to ~atol per step
   const SimulationResult full = simulate_full(body, ex, opt);
   const PerturbationResult pert = simulate_perturbation(body, ex, opt);
-  REQUIRE(full.ok);
-  REQUIRE(pert.total.ok);
+  REQUIRE(full.ok());
+  REQUIRE(pert.total.ok());
   const int n = body.n();
   // theta, Rx and the antisymmetric q (even-numbered) never move: exactly zero forcing
   INFO("max |Rx| " << full.z.col(0).cwiseAbs().maxCoeff() << ", max |theta| " << full.z.col(2).cwiseAbs().maxCoeff());
@@ -79,8 +79,8 @@ TEST_CASE("a load that starts a round-off span after t = 0 acts as one starting 
     INFO("the load starts at " << start << " s");
     const auto [full, pert] = run(start);
     INFO(full.message << " / " << pert.total.message);
-    REQUIRE(full.ok);
-    REQUIRE(pert.total.ok);
+    REQUIRE(full.ok());
+    REQUIRE(pert.total.ok());
     // the same pieces and steps: the same numbers, up to the round-off of the first piece's
     // start (measured 0: the breakpoint is merged into t = 0)
     CHECK((full.z - full0.z).cwiseAbs().maxCoeff() < 1e-14);
@@ -99,7 +99,7 @@ TEST_CASE("a large load over a short first piece still gives its impulse", "[sim
   const Excitation ex{{TimeProfile(TimeProfile::Kind::Steps, {0.0, width, 1.0}, {1e12, 0.0})}};
   const SimulationResult full = simulate_full(body, ex, opt);
   INFO(full.message);
-  REQUIRE(full.ok);
+  REQUIRE(full.ok());
   const FullModel model(body);
   const int N = body.dofs(), last = static_cast<int>(full.t.size()) - 1;
   Eigen::VectorXd x(2 * N);
@@ -117,8 +117,8 @@ TEST_CASE("paper moment example: only theta and antisymmetric q, perturbation di
   const SimulationOptions opt = tight(3.0);
   const SimulationResult full = simulate_full(body, ex, opt);
   const PerturbationResult pert = simulate_perturbation(body, ex, opt);
-  REQUIRE(full.ok);
-  REQUIRE(pert.total.ok);
+  REQUIRE(full.ok());
+  REQUIRE(pert.total.ok());
   // the issue's bound; symmetry keeps them at round-off (measured 1e-16)
   CHECK(full.z.leftCols(2).cwiseAbs().maxCoeff() < 1e-12);
   for (int j = 0; j < body.n(); j += 2) CHECK(full.z.col(3 + j).cwiseAbs().maxCoeff() < 1e-12);
@@ -147,8 +147,8 @@ double perturbation_error(const FlexibleBody& body, const Excitation& ex) {
   opt.integrator.atol = 1e-15;  // resolve differences down to ~1e-8 at eps = 0.01
   const SimulationResult full = simulate_full(body, ex, opt);
   const PerturbationResult pert = simulate_perturbation(body, ex, opt);
-  REQUIRE(full.ok);
-  REQUIRE(pert.total.ok);
+  REQUIRE(full.ok());
+  REQUIRE(pert.total.ok());
   return (full.z - pert.total.z).cwiseAbs().maxCoeff();
 }
 }  // namespace
@@ -180,7 +180,7 @@ TEST_CASE("full model conserves energy and momenta after the loads end", "[sim]"
   const Excitation ex = rich_loads(1.0);
   SimulationOptions opt = tight(10.0);
   const SimulationResult r = simulate_full(body, ex, opt);
-  REQUIRE(r.ok);
+  REQUIRE(r.ok());
   const FullModel model(body);
   const int N = body.dofs();
   auto state = [&](int i) {

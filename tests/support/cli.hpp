@@ -11,11 +11,13 @@ namespace freeflex_test {
 
 struct CliResult {
   int exit_code = -1;
-  std::string output;  // stdout and stderr together
+  std::string output;  // stdout and stderr together (unless redirected otherwise)
 };
 
-inline CliResult run_cli(const std::string& args) {
-  const std::string cmd = std::string("'") + FREEFLEX_CLI + "' " + args + " 2>&1";
+/// `redirect`: what the shell does with the streams (default: stderr into stdout; both
+/// are captured).
+inline CliResult run_cli(const std::string& args, const std::string& redirect = "2>&1") {
+  const std::string cmd = std::string("'") + FREEFLEX_CLI + "' " + args + " " + redirect;
   CliResult r;
   FILE* p = ::popen(cmd.c_str(), "r");
   if (!p) return r;

@@ -48,8 +48,8 @@ ManeuverProblem rich_problem(bool free_time, double w_energy, double w_time, dou
 }
 
 Eigen::MatrixXd dense_jacobian(const CollocationNlp& nlp, const Eigen::VectorXd& w) {
-  Eigen::VectorXd v(nlp.jacobian_nonzeros());
-  nlp.jacobian_values(w, v);
+  CollocationNlp::Data data = nlp.create_data();
+  const Eigen::VectorXd v = nlp.jacobian_values(data, w);
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(nlp.num_constraints(), nlp.num_variables());
   for (int i = 0; i < v.size(); ++i) J(nlp.jacobian_rows()[i], nlp.jacobian_cols()[i]) += v(i);
   return J;
@@ -57,8 +57,7 @@ Eigen::MatrixXd dense_jacobian(const CollocationNlp& nlp, const Eigen::VectorXd&
 
 Eigen::VectorXd lagrangian_gradient(const CollocationNlp& nlp, const Eigen::VectorXd& w, double sigma,
                                     const Eigen::VectorXd& lam) {
-  Eigen::VectorXd g(nlp.num_variables());
-  nlp.objective_gradient(w, g);
+  const Eigen::VectorXd g = nlp.objective_gradient(w);
   return sigma * g + dense_jacobian(nlp, w).transpose() * lam;
 }
 
@@ -98,8 +97,8 @@ TEST_CASE("collocation NLP derivatives match central differences", "[trajopt]") 
       }
 
       const double h = 1e-6;  // truncation ~h^2 ~1e-12, round-off ~1e-16/h ~1e-10 (entries O(1..10))
-      Eigen::VectorXd grad(n), g(m), gp(m), gm(m);
-      nlp.objective_gradient(w, grad);
+      CollocationNlp::Data data = nlp.create_data();
+      const Eigen::VectorXd grad = nlp.objective_gradient(w);
       const Eigen::MatrixXd J = dense_jacobian(nlp, w);
       Eigen::MatrixXd Jfd(m, n), Hfd(n, n);
       Eigen::VectorXd gradfd(n);
@@ -108,16 +107,15 @@ TEST_CASE("collocation NLP derivatives match central differences", "[trajopt]") 
         wp(i) += h;
         wm(i) -= h;
         gradfd(i) = (nlp.objective(wp) - nlp.objective(wm)) / (2 * h);
-        nlp.constraints(wp, gp);
-        nlp.constraints(wm, gm);
+        const Eigen::VectorXd gp = nlp.constraints(data, wp);
+        const Eigen::VectorXd gm = nlp.constraints(data, wm);
         Jfd.col(i) = (gp - gm) / (2 * h);
         Hfd.col(i) = (lagrangian_gradient(nlp, wp, sigma, lam) - lagrangian_gradient(nlp, wm, sigma, lam)) / (2 * h);
       }
       CHECK((grad - gradfd).cwiseAbs().maxCoeff() < 1e-7);  // see h
       CHECK((J - Jfd).cwiseAbs().maxCoeff() < 1e-7);        // also: FD is zero wherever the pattern has no entry
 
-      Eigen::VectorXd hv(nlp.hessian_nonzeros());
-      nlp.hessian_values(w, sigma, lam, hv);
+      const Eigen::VectorXd hv = nlp.hessian_values(data, w, sigma, lam);
       Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
       for (int i = 0; i < hv.size(); ++i) {
         const int r = nlp.hessian_rows()[i], cc = nlp.hessian_cols()[i];
@@ -162,6 +160,7 @@ TEST_CASE("the derivative-checker verdict is read from Ipopt's log", "[trajopt]"
   // count must then be positive, so the zero above is a real verdict.
   const FlexibleBody body = rich_body();
   TrajoptOptions o;
+  o.transcription = Transcription::HermiteSimpsonCompressed;
   o.intervals = 3;
   o.derivative_test = "second-order";
   o.max_iter = 0;
@@ -178,6 +177,7 @@ TEST_CASE("bad maneuver input throws with the field, the expectation and the val
   const FlexibleBody body = rich_body();
   const ManeuverProblem good = rich_problem(false, 1.0, 0.0, 0.0, false);
   TrajoptOptions o;
+  o.transcription = Transcription::HermiteSimpsonCompressed;
   o.intervals = 5;
 
   TrajoptOptions bad_n = o;

@@ -43,14 +43,13 @@ TEST_CASE("rigid dynamics reproduces the zero-order model and element forces", "
     Eigen::VectorXd x(6), u(4);
     x << U(rng), U(rng), 4.0 * U(rng), U(rng), U(rng), 3.0 * U(rng);
     for (int k = 0; k < 4; ++k) u(k) = 2.0 * U(rng);
-    Eigen::VectorXd commands = Eigen::VectorXd::Zero(4), xdot(6);
+    Eigen::VectorXd commands = Eigen::VectorXd::Zero(4);
     for (int k = 0; k < 4; ++k) commands(act[k]) = u(k);
-    zero.rhs(x, commands, xdot);
+    const Eigen::VectorXd xdot = zero.rhs(x, commands);
     // two different solution paths (LDLT of 𝕄_rr vs the Schur-complement closed form)
     CHECK((dyn.eval(x, u) - xdot).cwiseAbs().maxCoeff() < 1e-12 * (1.0 + xdot.cwiseAbs().maxCoeff()));
-    Eigen::VectorXd g(body.dofs());
     for (int k = 0; k < 4; ++k) {
-      body.element_force(act[k], x(2), q0, g);
+      const Eigen::VectorXd g = body.element_force(act[k], x(2), q0);
       // same trigonometric terms evaluated in another order: round-off only
       CHECK((dyn.actuator_force(k, x(2)) - g.head<3>()).cwiseAbs().maxCoeff() < 1e-14);
     }
@@ -69,19 +68,21 @@ TEST_CASE("rigid dynamics Jacobian and Hessian contraction match central differe
     Eigen::VectorXd z(nz), lam(6);
     z << U(rng), U(rng), 4.0 * U(rng), U(rng), U(rng), 3.0 * U(rng), 2 * U(rng), 2 * U(rng), 2 * U(rng), 2 * U(rng);
     for (int i = 0; i < 6; ++i) lam(i) = U(rng);
-    Eigen::VectorXd f(6), fp(6), fm(6);
-    Eigen::MatrixXd J(6, nz), Jp(6, nz), Jm(6, nz), H(nz, nz);
-    dyn.jacobian(z.head(6), z.tail(4), f, J);
+    RigidDynamics::Data data = dyn.create_data(), plus = dyn.create_data(), minus = dyn.create_data();
+    dyn.calc_diff(data, z.head(6), z.tail(4));
+    const Eigen::VectorXd f = data.f;
+    const Eigen::MatrixXd J = data.J;
     CHECK((f - dyn.eval(z.head(6), z.tail(4))).cwiseAbs().maxCoeff() == 0.0);
-    dyn.hessian_contraction(z.head(6), z.tail(4), lam, H);
+    const Eigen::MatrixXd H = dyn.calc_hessian(data, z.head(6), z.tail(4), lam);
     Eigen::MatrixXd Jfd(6, nz), Hfd(nz, nz);
     for (int c = 0; c < nz; ++c) {
       Eigen::VectorXd zp = z, zm = z;
       zp(c) += h;
       zm(c) -= h;
-      dyn.jacobian(zp.head(6), zp.tail(4), fp, Jp);
-      dyn.jacobian(zm.head(6), zm.tail(4), fm, Jm);
-      Jfd.col(c) = (fp - fm) / (2 * h);
+      dyn.calc_diff(plus, zp.head(6), zp.tail(4));
+      dyn.calc_diff(minus, zm.head(6), zm.tail(4));
+      const Eigen::MatrixXd &Jp = plus.J, &Jm = minus.J;
+      Jfd.col(c) = (plus.f - minus.f) / (2 * h);
       Hfd.col(c) = ((lam.transpose() * Jp) - (lam.transpose() * Jm)).transpose() / (2 * h);
     }
     INFO("trial " << trial);

@@ -1,17 +1,17 @@
 #pragma once
-// The application layer: what `freeflex run` and `freeflex modes` do with a design.
-#include <functional>
-#include <memory>
+// The application layer: what `freeflex run` does with a design. It runs every study the
+// design asks for (app/studies.hpp), writes their files through a staging directory
+// (io/staging in src/) and summary.json last, and returns the typed results.
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
-#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
+#include "freeflex/app/progress.hpp"
+#include "freeflex/app/studies.hpp"
 #include "freeflex/io/design.hpp"
-#include "freeflex/io/output.hpp"
-#include "freeflex/io/plot.hpp"
-#include "freeflex/trajopt/solve.hpp"
 
 namespace freeflex {
 
@@ -25,90 +25,40 @@ enum ExitCode : int {
 
 /// Where a run writes and how much it says.
 struct RunOptions {
-  std::string out_dir;
-  bool quiet = false;
-  std::ostream* log = nullptr;  ///< progress and tables; null: silent
+  std::string out_dir;             ///< created if needed; empty: the results only, no file written
+  bool quiet = false;              ///< no progress, tables or warnings on the streams below
+  std::ostream* log = nullptr;     ///< progress, tables and the closing line; null: silent
+  std::ostream* errors = nullptr;  ///< warnings as they happen; null: silent
 };
 
-/// Collects the files of one run and the figures that could not be drawn.
-class RunOutput {
- public:
-  /// Files go into `dir`; messages name `shown_dir` (where they end up) if it is given.
-  RunOutput(std::string dir, std::ostream* log, std::string shown_dir = {})
-      : dir_(std::move(dir)), shown_dir_(shown_dir.empty() ? dir_ : std::move(shown_dir)), log_(log) {}
-  void write(const std::string& name, const std::string& content);
-  void csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data);
-  /// Renders a plot (unless plots are off); a failure becomes a warning, not an error.
-  void plot(const PlotSpec& spec, bool enabled);
-  void warn(const std::string& message);
-  std::ostream* log() const { return log_; }
-  const std::string& dir() const { return dir_; }
-  const std::vector<std::string>& files() const { return files_; }
-  const std::vector<std::string>& warnings() const { return warnings_; }
+/// Throws std::invalid_argument for an out_dir no file system accepts; the defaults (no
+/// directory: results only) are valid.
+void validate(const RunOptions& options);
 
- private:
-  std::string shown(std::string text) const;
-  /// Writes `name` in dir() through `writer` and counts it among the run's files.
-  void stream(const std::string& name, const std::function<void(std::ostream&)>& writer);
+/// Everything a run did: each study's typed result, the files written (summary.json
+/// last) and the warnings.
+struct RunResult {
+  StudyStatus status = StudyStatus::Ok;
+  std::string message;  ///< why the run failed (each failed study's reason, joined by "; ")
+  bool ok() const { return status == StudyStatus::Ok; }
+  int exit_code() const { return ok() ? kExitOk : kExitNumericalFailure; }
 
-  std::string dir_, shown_dir_;
-  std::ostream* log_;
-  std::vector<std::string> files_, warnings_;
+  std::optional<FreeVibrationStudyResult> free_vibration;
+  std::optional<ManeuverStudyResult> maneuver;
+  std::optional<SimulationStudyResult> simulation;
+  std::optional<SuppressionStudyResult> suppression;
+  std::vector<std::string> files;
+  std::vector<std::string> warnings;
 };
 
-/// How far a long phase has got, on the log: a line at most every `every_s` seconds of
-/// wall time ("  4.2 of 20 s (21%) after 6 s"), none if the phase ends sooner.
-class ProgressReport {
- public:
-  /// `every_s` = 0: a line for every call (for tests).
-  ProgressReport(std::ostream* log, double total_s, double every_s = 2.0);
-  /// The phase has covered `t` seconds of simulated time out of `total_s`.
-  void update(double t);
-  /// For phases without a known end: "  <what> after 6 s", at the same pace as update().
-  void note(const std::string& what);
-  /// update() as a callback (IntegratorOptions::progress); this object must outlive it.
-  std::function<void(double)> callback();
-  /// What to print before the phase's closing words: a new indented line if progress
-  /// lines were printed, nothing otherwise.
-  const char* resume() const { return printed_ ? "  " : ""; }
+/// Does everything the design asks and writes DIR/summary.json last. Numerical failure
+/// is a result (status, message: exit 1). Throws IoError when results cannot be written
+/// or another run holds DIR (exit 3) and std::invalid_argument for bad input found late
+/// (exit 2; nothing is written).
+RunResult run_design(const Design& design, const RunOptions& options);
 
- private:
-  void schedule(double now);  ///< sets when the next line is due
-
-  std::ostream* log_;
-  double total_s_, every_s_;
-  double start_, next_;
-  bool printed_ = false;
-};
-
-/// Elastic natural frequencies of a design's beam with `noa` functions.
-struct ModeTable {
-  Eigen::VectorXd omega_rad_s, freq_hz, lambda;
-};
-ModeTable mode_table(const Design& design, int noa);
-
-/// Does everything the design asks and writes DIR/summary.json last. Returns an
-/// ExitCode; throws std::runtime_error only when a file cannot be written.
-int run_design(const Design& design, const RunOptions& options);
-
-/// The [free_vibration] study; adds its results to `summary`.
-void run_free_vibration(const Design& design, RunOutput& out, Json& summary);
-/// What [maneuver] hands to [simulation]: the optimized motion and its commands.
-struct ManeuverOutcome {
-  int code = kExitOk;
-  std::shared_ptr<const CollocationTrajectory> trajectory;  ///< null if it failed
-  std::vector<int> actuators;                               ///< element index of each command
-  double duration_s = 0.0;
-  /// Adds the optimized commands to their actuators in `ex` (nothing after the maneuver).
-  void drive(Excitation& ex) const;
-  /// The optimized motion, continued at rest (its final rates) after it ends.
-  std::shared_ptr<const RigidTrajectory> nominal() const;
-};
-/// The [maneuver] study.
-ManeuverOutcome run_maneuver(const Design& design, RunOutput& out, Json& summary, bool quiet);
-/// The [controller] study: TV-LQR against the open loop, comparison.csv; returns an ExitCode.
-int run_suppression(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver = nullptr);
-/// The [simulation] study, about the optimized maneuver if one is given; returns an ExitCode.
-int run_simulation(const Design& design, RunOutput& out, Json& summary, const ManeuverOutcome* maneuver = nullptr);
+/// summary.json: the design, the status and message, every study's key figures, the
+/// files and warnings.
+nlohmann::ordered_json summary_json(const Design& design, const RunResult& result);
 
 }  // namespace freeflex

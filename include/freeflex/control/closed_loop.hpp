@@ -19,7 +19,8 @@
 
 namespace freeflex {
 
-/// Nominal actuator commands u0(t): one entry per input of the first-order model.
+/// Nominal actuator commands u0(t): a callback that writes one entry per input of the
+/// first-order model into the buffer it is handed.
 using ActuatorCommandFunction = std::function<void(const Instant&, Eigen::Ref<Eigen::VectorXd>)>;
 
 /// The element commands of the nominal motion: every load's profile plus u0 on the
@@ -41,15 +42,20 @@ struct ClosedLoopOptions {
   IntegratorOptions integrator = closed_loop_integrator();  ///< CVODES settings
   double t_begin = 0.0;              ///< [s]; with t_end <= t_begin: the law's [t0, tf]
   double t_end = 0.0;
-  double output_step_s = 0.005;
-  Eigen::VectorXd limits;            ///< |u0 + u1| <= limits(k) [N or N m]; empty: no limits
+  double output_step_s = 0.005;      ///< [s], > 0
+  Eigen::VectorXd limits;            ///< |u0 + u1| <= limits(k) [N or N m], each > 0; empty: no limits
   Eigen::VectorXd x1_initial;        ///< perturbation at t_begin (size 2N); empty: zero
   std::vector<double> breakpoints;   ///< extra breakpoints (the nominal's and loads' are added)
 };
 
+/// Throws std::invalid_argument naming the first setting out of range (sizes are checked
+/// against the model by the simulations); the defaults are valid.
+void validate(const ClosedLoopOptions& options);
+
 struct ClosedLoopResult {
-  bool ok = false;
+  IntegrationStatus status = IntegrationStatus::Failed;
   std::string message;
+  bool ok() const { return status == IntegrationStatus::Completed; }
   Eigen::VectorXd t;        ///< output times reached
   Eigen::MatrixXd z;        ///< totals [Rx, Ry, θ, q], one row per time
   Eigen::MatrixXd z_dot;

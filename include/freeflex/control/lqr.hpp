@@ -21,6 +21,7 @@
 #include <Eigen/Dense>
 
 #include "freeflex/dynamics/flexible_body.hpp"
+#include "freeflex/enum_names.hpp"
 
 namespace freeflex {
 
@@ -36,6 +37,10 @@ struct CareOptions {
   double imaginary_axis_tolerance = 1e-8;
   int max_newton_iterations = 8;
 };
+
+/// Throws std::invalid_argument naming the first setting out of range; the defaults are
+/// valid.
+void validate(const CareOptions& options);
 
 struct CareResult {
   enum class Status {
@@ -88,5 +93,15 @@ void check_positive_definite(const Eigen::Ref<const Eigen::MatrixXd>& W, int n, 
 /// Units: w_elastic [1/J per J], w_rigid_pos per m² or rad², w_rigid_rate per (m/s)² or
 /// (rad/s)². Throws std::invalid_argument if a weight is negative or not finite.
 Eigen::MatrixXd vibration_weight(const FlexibleBody& body, double w_elastic, double w_rigid_pos, double w_rigid_rate);
+
+template <>
+struct EnumNames<CareResult::Status> {
+  static constexpr const char* what = "CARE status";
+  static constexpr std::array<std::pair<CareResult::Status, const char*>, 4> names{
+      {{CareResult::Status::Solved, "solved"},
+       {CareResult::Status::NotStabilizable, "not_stabilizable"},
+       {CareResult::Status::NoStabilizingSolution, "no_stabilizing_solution"},
+       {CareResult::Status::Failed, "failed"}}};
+};
 
 }  // namespace freeflex

@@ -33,7 +33,9 @@
 
 #include "freeflex/dynamics/flexible_body.hpp"
 #include "freeflex/dynamics/zero_order.hpp"
+#include "freeflex/enum_names.hpp"
 #include "freeflex/model/loads.hpp"
+#include "freeflex/sim/integrator.hpp"
 
 namespace freeflex {
 
@@ -59,11 +61,9 @@ class BangBangRotation : public RigidTrajectory {
   std::vector<double> theta_, rate_;  // at each t_
 };
 
+/// Settings of the switch-time design; the problem (actuator, rotation, torque limit,
+/// modes) is given to design_switch_times as arguments.
 struct SwitchTimeOptions {
-  int actuator = -1;               ///< element index of a torque at o
-  double rotation_rad = 3.0;       ///< Δθ > 0
-  double torque_limit_Nm = 1.0;    ///< τmax > 0
-  int modes = 1;                   ///< k in [0, 4]: excited elastic modes left at rest
   double rtol = 1e-10;             ///< first-order simulations (Adams)
   double atol = 1e-13;
   /// On the scaled constraints (each modal one is sqrt(E_j / E_rigid)): 1e-7 leaves
@@ -79,6 +79,10 @@ struct SwitchTimeOptions {
   /// starts (for progress reports); must not throw.
   std::function<void(int)> progress;
 };
+
+/// Throws std::invalid_argument naming the first setting out of range (the actuator is
+/// checked against the body by design_switch_times); the defaults are valid.
+void validate(const SwitchTimeOptions& options);
 
 struct SwitchTimeResult {
   enum class Status { Solved, NotConverged };
@@ -119,15 +123,20 @@ struct ExcitedModes {
 };
 ExcitedModes excited_modes(const FlexibleBody& body, int element, double theta = 0.0);
 
-/// Throws std::invalid_argument (before any work) if the actuator is not an element of
-/// the body, not a torque, not at o, if S_o != 0, or for Δθ, τmax, k, tolerances out of range.
-SwitchTimeResult design_switch_times(const FlexibleBody& body, const SwitchTimeOptions& options);
+/// Switch times of a rest-to-rest rotation by Δθ = rotation_rad > 0 [rad] with the torque
+/// element `actuator` (|τ| <= torque_limit_Nm) that leave the first `modes` (k in [0, 4])
+/// excited elastic modes at rest. Throws std::invalid_argument (before any work) if the
+/// actuator is not an element of the body, not a torque, not at o, if S_o != 0, or for
+/// Δθ, τmax, k or options out of range.
+SwitchTimeResult design_switch_times(const FlexibleBody& body, int actuator, double rotation_rad,
+                                     double torque_limit_Nm, int modes, const SwitchTimeOptions& options = {});
 
 /// The first-order model's state at the end of a bang-bang rotation and the energy of
 /// the first `modes` excited elastic modes in it.
 struct BangBangResidual {
-  bool ok = false;
+  IntegrationStatus status = IntegrationStatus::Failed;
   std::string message;
+  bool ok() const { return status == IntegrationStatus::Completed; }
   Eigen::VectorXd omega_rad_s;     ///< targeted modes
   Eigen::VectorXd energy_J;        ///< ½(η'² + ω² η²) of each
   Eigen::VectorXd x1_end;          ///< first-order state at T
@@ -149,5 +158,19 @@ struct InputShaper {
 };
 InputShaper zv_shaper(double omega_rad_s, double zeta = 0.0);
 InputShaper zvd_shaper(double omega_rad_s, double zeta = 0.0);
+
+template <>
+struct EnumNames<SwitchTimeResult::Status> {
+  static constexpr const char* what = "switch-time status";
+  static constexpr std::array<std::pair<SwitchTimeResult::Status, const char*>, 2> names{
+      {{SwitchTimeResult::Status::Solved, "solved"}, {SwitchTimeResult::Status::NotConverged, "not_converged"}}};
+};
+
+template <>
+struct EnumNames<SwitchTimeOptions::Refine> {
+  static constexpr const char* what = "refinement";
+  static constexpr std::array<std::pair<SwitchTimeOptions::Refine, const char*>, 2> names{
+      {{SwitchTimeOptions::Refine::Newton, "newton"}, {SwitchTimeOptions::Refine::Slsqp, "slsqp"}}};
+};
 
 }  // namespace freeflex

@@ -18,10 +18,10 @@
 // Lyapunov equation (A_clᵀ − I/2γ) Z + Z (A_cl − I/2γ) = −R/γ and the s, c blocks follow
 // by block-triangular solves (O(n³) instead of the O(n⁶) dense LU of an
 // n(n+1)/2-dimensional Jacobian: 18 states → 171 + 19 unknowns, 46 → 1081 + 47 for
-// NOA = 20). A_cl is block-diagonalized at each refresh (ModalLyapunovSolver: then a
-// solve is four n x n products and closed-form 2x2 blocks) unless its eigenvector basis
-// is ill-conditioned (κ > modal_max_condition, e.g. P ≈ 0 with the free body's rigid
-// double integrators), when its real Schur form is used (LyapunovSolver). BDF rather
+// NOA = 20). A_cl is block-diagonalized at each refresh (then a solve is four n x n
+// products and closed-form 2x2 blocks) unless its eigenvector basis is ill-conditioned
+// (κ > modal_max_condition, e.g. P ≈ 0 with the free body's rigid double integrators),
+// when its real Schur form is used (control/lyapunov_solvers.hpp in src/). BDF rather
 // than Adams because the LQR closed loop is stiff (a real pole at −8.6e3 1/s on the
 // paper beam at NOA = 6). The step count (~1000 per second of time-varying model at
 // NOA = 6) is set by the lightly damped closed-loop modes (−7 ± 308i 1/s), which BDF
@@ -46,12 +46,12 @@
 
 #include "freeflex/control/lqr.hpp"
 #include "freeflex/dynamics/first_order.hpp"
+#include "freeflex/enum_names.hpp"
 
 namespace freeflex {
 
 /// A(t), B(t), g(t) of x' = A x + B u + g at an instant (sizes n x n, n x m, n).
-using StateSpaceFunction =
-    std::function<void(const Instant&, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g)>;
+using StateSpaceFunction = std::function<StateSpace(const Instant&)>;
 
 /// A linear time-varying system: what the TV-LQR needs of a model.
 struct LtvSystem {
@@ -65,33 +65,35 @@ struct LtvSystem {
 /// must outlive the result.
 LtvSystem ltv_system(const FirstOrderModel& model);
 
+/// Settings of the TV-LQR solve; the problem (system, horizon, weights) is given to
+/// solve_tvlqr as arguments.
 struct TvlqrOptions {
-  double t0 = 0.0;   ///< [s]
-  double tf = 3.0;   ///< [s], > t0
-  Eigen::MatrixXd Q;  ///< n x n, symmetric PSD
-  Eigen::MatrixXd R;  ///< m x m, symmetric PD
-  /// n x n symmetric PSD; empty: the CARE solution of the model at tf (on its
-  /// controllable subspace, see CareOptions::restrict_to_controllable).
+  /// Terminal weight (n x n, symmetric PSD); empty: the CARE solution of the model at tf
+  /// (on its controllable subspace, see CareOptions::restrict_to_controllable).
   std::optional<Eigen::MatrixXd> Qf;
-  double grid_step_s = 0.005;  ///< spacing of the stored gains
-  double rtol = 1e-8;          ///< CVODES relative tolerance
-  double atol = 1e-10;         ///< absolute tolerance, relative to σ (see above)
-  long max_steps = 200000;     ///< per piece
-  std::vector<double> breakpoints;  ///< extra breakpoints (e.g. load profile times)
+  double grid_step_s = 0.005;  ///< spacing of the stored gains [s], > 0
+  double rtol = 1e-8;          ///< CVODES relative tolerance, > 0
+  double atol = 1e-10;         ///< absolute tolerance, relative to σ (see above), > 0
+  long max_steps = 200000;     ///< per piece, > 0
+  std::vector<double> breakpoints;  ///< extra breakpoints (e.g. load profile times) [s]
   bool store_riccati = false;       ///< keep P at every grid time (n² doubles each)
   /// Newton systems of BDF: Lyapunov = the exact solve for the closed loop frozen at the
   /// last setup (modified Newton, one O(n³) solve per iteration); Gmres = GMRES with that
   /// solve as preconditioner and exact Jacobian products (more work per iteration, kept as
   /// a cross-check).
   enum class NewtonSolver { Lyapunov, Gmres } newton_solver = NewtonSolver::Lyapunov;
-  /// The frozen closed loop is block-diagonalized (ModalLyapunovSolver, ~3x cheaper
-  /// solves) when its eigenvector basis has κ₁ <= this, else brought to real Schur form
-  /// (LyapunovSolver). 0: always the Schur form.
+  /// The frozen closed loop is block-diagonalized (~3x cheaper solves) when its
+  /// eigenvector basis has κ₁ <= this, else brought to real Schur form. 0: always the
+  /// Schur form.
   double modal_max_condition = 1e6;
   /// Optional: called with tf - t each time the backward sweep stores a grid time t
   /// (for progress reports on long solves); must not throw.
   std::function<void(double)> progress;
 };
+
+/// Throws std::invalid_argument naming the first setting out of range; the defaults are
+/// valid. (Qf is checked against the system by solve_tvlqr.)
+void validate(const TvlqrOptions& options);
 
 struct TvlqrResult {
   enum class Status { Solved, TerminalCareFailed, IntegrationFailed };
@@ -125,13 +127,33 @@ struct TvlqrResult {
   double predicted_cost(const Eigen::Ref<const Eigen::VectorXd>& x1) const;
 };
 
-/// TV-LQR on any LTV system. Throws std::invalid_argument (before any work) for
-/// tf <= t0, non-finite times, a grid step <= 0, tolerances <= 0, weight sizes, Q or Qf
-/// not PSD, R not PD. Numerical failure (terminal CARE, CVODES) is reported in the result.
-TvlqrResult solve_tvlqr(const LtvSystem& system, const TvlqrOptions& options);
+/// TV-LQR on any LTV system over [t0, tf] [s] with state weight Q (n x n, symmetric
+/// PSD) and input weight R (m x m, symmetric PD). Throws std::invalid_argument (before
+/// any work) for tf <= t0, non-finite times, weight sizes, Q or Qf not PSD, R not PD, or
+/// options out of range. Numerical failure (terminal CARE, CVODES) is reported in the
+/// result.
+TvlqrResult solve_tvlqr(const LtvSystem& system, double t0, double tf, const Eigen::MatrixXd& Q,
+                        const Eigen::MatrixXd& R, const TvlqrOptions& options = {});
 
 /// TV-LQR on the first-order model. Additionally requires t0 >= nominal().t_begin() and
 /// tf >= nominal().t_end(): the horizon must cover the whole nominal maneuver.
-TvlqrResult solve_tvlqr(const FirstOrderModel& model, const TvlqrOptions& options);
+TvlqrResult solve_tvlqr(const FirstOrderModel& model, double t0, double tf, const Eigen::MatrixXd& Q,
+                        const Eigen::MatrixXd& R, const TvlqrOptions& options = {});
+
+template <>
+struct EnumNames<TvlqrResult::Status> {
+  static constexpr const char* what = "TV-LQR status";
+  static constexpr std::array<std::pair<TvlqrResult::Status, const char*>, 3> names{
+      {{TvlqrResult::Status::Solved, "solved"},
+       {TvlqrResult::Status::TerminalCareFailed, "terminal_care_failed"},
+       {TvlqrResult::Status::IntegrationFailed, "integration_failed"}}};
+};
+
+template <>
+struct EnumNames<TvlqrOptions::NewtonSolver> {
+  static constexpr const char* what = "Newton solver";
+  static constexpr std::array<std::pair<TvlqrOptions::NewtonSolver, const char*>, 2> names{
+      {{TvlqrOptions::NewtonSolver::Lyapunov, "lyapunov"}, {TvlqrOptions::NewtonSolver::Gmres, "gmres"}}};
+};
 
 }  // namespace freeflex

@@ -13,8 +13,15 @@
 
 namespace freeflex {
 
-/// Nominal commands of every force element at an instant.
+/// Nominal commands of every force element at an instant: a callback that writes them
+/// into the buffer it is handed (one entry per element).
 using CommandFunction = std::function<void(const Instant&, Eigen::Ref<Eigen::VectorXd>)>;
+
+/// x' = A x + B u + g at one instant (sizes n x n, n x m, n).
+struct StateSpace {
+  Eigen::MatrixXd A, B;
+  Eigen::VectorXd g;
+};
 
 class FirstOrderModel {
  public:
@@ -25,6 +32,14 @@ class FirstOrderModel {
     Eigen::MatrixXd Ct;  ///< -∂(residual)/∂z'
     Eigen::MatrixXd Gu;  ///< generalized force per unit command of each input
     Eigen::VectorXd r0;  ///< residual of the full model on the nominal motion (the forcing)
+  };
+
+  /// Workspace of one thread of evaluation (make one with create_data()): results and
+  /// scratch. The model is const and may serve several threads, each with its own Data.
+  struct Data {
+    StateSpace state_space;  ///< from the last state_space()
+    Eigen::VectorXd x1_dot;  ///< from the last rhs()
+    Eigen::VectorXd q, q0, u0, f, dG;  // scratch of rhs()
   };
 
   /// `inputs` are the element indices whose commands u1 perturb (the actuators); the
@@ -38,14 +53,18 @@ class FirstOrderModel {
   int input_size() const { return static_cast<int>(inputs_.size()); }
   const std::vector<int>& inputs() const { return inputs_; }
 
-  void implicit_form(const Instant& at, Implicit& out) const;
-  /// A(t), B(t), g(t) of eq. 7.3.
-  void state_space(const Instant& at, Eigen::MatrixXd& A, Eigen::MatrixXd& B, Eigen::VectorXd& g) const;
-  /// x1' = A x1 + B u1 + g without forming A: the products of eq. 7.1 term by term and
-  /// one solve with 𝕄0(θ0) = T 𝕄0(0) Tᵀ, T = blockdiag(C(θ0), 1, I), by the kept inverse
-  /// of 𝕄0(0).
-  void rhs(const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1, const Eigen::Ref<const Eigen::VectorXd>& u1,
-           Eigen::Ref<Eigen::VectorXd> x1_dot) const;
+  Data create_data() const;
+
+  Implicit implicit_form(const Instant& at) const;
+  /// A(t), B(t), g(t) of eq. 7.3, into data.state_space.
+  const StateSpace& state_space(Data& data, const Instant& at) const;
+  /// The same, returned (allocates a workspace: for one-off use).
+  StateSpace state_space(const Instant& at) const;
+  /// x1' = A x1 + B u1 + g into data.x1_dot, without forming A: the products of eq. 7.1
+  /// term by term and one solve with 𝕄0(θ0) = T 𝕄0(0) Tᵀ, T = blockdiag(C(θ0), 1, I), by
+  /// the kept inverse of 𝕄0(0). u1 has input_size() entries (or none: zero).
+  const Eigen::VectorXd& rhs(Data& data, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
+                             const Eigen::Ref<const Eigen::VectorXd>& u1) const;
 
  private:
   const FlexibleBody& body_;

@@ -1,7 +1,8 @@
 #pragma once
 // The discretized flexible body shared by all three models (docs/theory.md section 6):
 // modal integrals, the configuration-dependent mass matrix, generalized forces of the
-// force elements with their derivatives, and modal damping.
+// force elements with their derivatives, and modal damping. The allocation-free forms
+// the simulators' right-hand sides use are private to src/ (dynamics/body_kernels.hpp).
 #include <string>
 #include <vector>
 
@@ -31,23 +32,27 @@ class FlexibleBody {
   double element_x(int e) const { return x_[e]; }
 
   /// 𝕄(theta, q), eq. 6.1, (3+n) x (3+n).
-  void mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Ref<Eigen::MatrixXd> out) const;
+  Eigen::MatrixXd mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
 
-  /// Generalized force [F; M_o; Q] of element e per unit command at (theta, q), eq. 6.4;
-  /// if `d` is given it receives the derivative with respect to (theta, q): (3+n) x (1+n).
-  void element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
-                     Eigen::Ref<Eigen::VectorXd> g, Eigen::MatrixXd* d = nullptr) const;
-  /// Sum over elements of commands(e) times element_force (and its derivative).
-  void generalized_force(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
-                         const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G,
-                         Eigen::MatrixXd* d = nullptr) const;
+  /// A generalized force and its derivative with respect to (theta, q).
+  struct ForceDerivative {
+    Eigen::VectorXd value;       ///< [F; M_o; Q], 3+n
+    Eigen::MatrixXd derivative;  ///< (3+n) x (1+n)
+  };
+  /// Generalized force [F; M_o; Q] of element e per unit command at (theta, q), eq. 6.4.
+  Eigen::VectorXd element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
+  /// The same with its derivative with respect to (theta, q).
+  ForceDerivative element_force_derivative(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
+  /// Sum over elements of commands(e) times element_force.
+  Eigen::VectorXd generalized_force(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                    const Eigen::Ref<const Eigen::VectorXd>& commands) const;
+  /// The same with its derivative with respect to (theta, q).
+  ForceDerivative generalized_force_derivative(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                               const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
-  /// Adds scale times the generalized force of element e at (theta, q) to G and, if dG is
-  /// given, scale times its derivative along (d_theta, d_q) to dG (d_q null: zero).
-  /// The allocation-free path of the simulators; element_force is the reference.
-  void add_element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q, double scale,
-                         Eigen::Ref<Eigen::VectorXd> G, double d_theta = 0.0, const Eigen::VectorXd* d_q = nullptr,
-                         Eigen::VectorXd* dG = nullptr) const;
+  /// Basis values Φ(x_e) and slopes Φ'(x_e) at element e (1 x n).
+  const Eigen::RowVectorXd& element_phi(int e) const { return phi_[e]; }
+  const Eigen::RowVectorXd& element_slope(int e) const { return dphi_[e]; }
 
   /// Modal damping D (eq. 6.5), (3+n) x (3+n); zero when no ratio is set.
   const Eigen::MatrixXd& damping() const { return D_; }

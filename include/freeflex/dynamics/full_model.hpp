@@ -9,9 +9,12 @@ namespace freeflex {
 
 class FullModel {
  public:
-  /// Scratch space for one thread of evaluation (make one with create_data()).
+  /// Workspace of one thread of evaluation (make one with create_data()): the result of
+  /// rhs() and its scratch. The model itself is const: one model serves any number of
+  /// threads, each with its own Data.
   struct Data {
-    Eigen::VectorXd G, b, Mq, Kq, Dzd;
+    Eigen::VectorXd x_dot;  ///< x' from the last rhs()
+    Eigen::VectorXd G, b, Mq, Kq, Dzd;  // scratch
   };
 
   /// Factors the body-frame mass matrix at rest once (see rhs).
@@ -25,16 +28,16 @@ class FullModel {
                            const Eigen::Ref<const Eigen::VectorXd>& z_ddot,
                            const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
-  /// x' for x = [z, z'] under element commands u. Returns false if the mass matrix is
-  /// singular or indefinite (the state has left the model's validity).
+  /// x' for x = [z, z'] under element commands u, into data.x_dot. Returns false if the
+  /// mass matrix is singular or indefinite (the state has left the model's validity).
   ///
   /// 𝕄(θ, q) = T 𝕄_b(q) Tᵀ with T = blockdiag(C(θ), 1, I) and the body-frame 𝕄_b(q),
   /// which differs from 𝕄_b(0) only in the (x, θ) entries (−Φ̄ q) and the (θ, θ) entry
   /// (+ qᵀ M q): a symmetric rank-two change. So z'' comes from the inverse of 𝕄_b(0),
   /// formed at construction, and a 2 x 2 Woodbury correction instead of a new
   /// factorization at every call.
-  bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
-           Eigen::Ref<Eigen::VectorXd> x_dot) const;
+  bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+           const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
   /// Invariants with no load (eq. 6.7): T + V, linear momentum, angular momentum about
   /// the inertial origin.

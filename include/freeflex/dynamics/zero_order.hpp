@@ -26,8 +26,9 @@ class ZeroOrderModel {
   /// [R''; θ''] at state x0 under element commands.
   Eigen::Vector3d acceleration(const Eigen::Ref<const Eigen::VectorXd>& x0,
                                const Eigen::Ref<const Eigen::VectorXd>& commands) const;
-  void rhs(const Eigen::Ref<const Eigen::VectorXd>& x0, const Eigen::Ref<const Eigen::VectorXd>& commands,
-           Eigen::Ref<Eigen::VectorXd> x0_dot) const;
+  /// x0' = [x0(3:5); acceleration].
+  Eigen::Matrix<double, 6, 1> rhs(const Eigen::Ref<const Eigen::VectorXd>& x0,
+                                  const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
  private:
   const FlexibleBody& body_;

@@ -1,15 +1,17 @@
 #pragma once
-// Design files: a TOML scenario loaded into a validated struct (docs/design-files.md).
+// Design files: a TOML scenario loaded into a validated struct (README, design keys).
 // Keys carry their unit (length_m, bending_stiffness_Nm2); angles are degrees in files
 // and radians inside. A file is validated whole before any work: every problem is
 // collected, each naming the key, the line, what was found and what is allowed, and
-// unknown keys are errors.
+// unknown keys are errors. A key left out takes the default of the struct it sets (the
+// default-constructed study or library Options below).
 #include <cstddef>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "freeflex/control/tvlqr.hpp"
 #include "freeflex/model/beam.hpp"
 #include "freeflex/model/loads.hpp"
 #include "freeflex/sim/simulate.hpp"
@@ -96,6 +98,7 @@ struct ManeuverStudy {
   ManeuverProblem problem;                  ///< actuator indices into Design::force_elements()
   TrajoptOptions options;
   std::vector<std::string> actuator_names;  ///< in the order of problem.actuators
+  bool quiet = false;                       ///< no Ipopt log as progress (options.verbose follows the run)
 };
 
 /// [controller]: feedback designed on the first-order model about the nominal motion.
@@ -108,7 +111,7 @@ struct ControllerStudy {
   double weight_rigid_position = 1.0;
   double weight_rigid_rate = 1.0;
   Eigen::VectorXd input_weights;    ///< R diagonal, one per actuator (> 0)
-  double grid_step_s = 0.005;
+  double grid_step_s = TvlqrOptions{}.grid_step_s;  ///< spacing of the stored gains
   double simulate_until_s = 0.0;    ///< end of the comparison runs (0: the horizon)
   std::string figure = "comparison";
 };
@@ -118,7 +121,7 @@ struct ControllerStudy {
 struct BangBangStudy {
   std::string actuator_name;
   int actuator = -1;          ///< element index
-  std::vector<int> modes;     ///< distinct k values, each in [0, 4] and at most the modes the actuator excites
+  std::vector<int> modes = {1, 2};  ///< distinct k values, each in [0, 4] and at most the modes the actuator excites
 };
 
 struct Design {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Dense>
 
+#include "freeflex/enum_names.hpp"
 #include "freeflex/model/instant.hpp"
 
 namespace freeflex {
@@ -55,16 +56,32 @@ struct ForceElement {
 struct Excitation {
   std::vector<std::optional<TimeProfile>> profiles;
   /// Optional commands added on top of the profiles (e.g. an optimized maneuver driving
-  /// the actuators), with the times where they may jump or kink and when they end.
+  /// the actuators), with the times where they may jump or kink and when they end. A
+  /// callback: it adds into the buffer of every element's commands it is handed.
   std::function<void(const Instant&, Eigen::Ref<Eigen::VectorXd>)> add_commands;
   std::vector<double> add_breakpoints;
   double add_end_time = 0.0;
-  /// commands(e) for every element; `commands` must have profiles.size() entries.
-  void evaluate(const Instant& at, Eigen::Ref<Eigen::VectorXd> commands) const;
+  /// commands(e) for every element (profiles.size() entries).
+  Eigen::VectorXd commands(const Instant& at) const;
   /// Every profile time: where some command may jump or kink.
   std::vector<double> breakpoints() const;
   /// Latest profile time (0 if there is none): no load acts after it.
   double end_time() const;
+};
+
+template <>
+struct EnumNames<TimeProfile::Kind> {
+  static constexpr const char* what = "profile type";
+  static constexpr std::array<std::pair<TimeProfile::Kind, const char*>, 2> names{
+      {{TimeProfile::Kind::Steps, "steps"}, {TimeProfile::Kind::Linear, "linear"}}};
+};
+
+template <>
+struct EnumNames<ForceElement::Type> {
+  static constexpr const char* what = "force element type";
+  static constexpr std::array<std::pair<ForceElement::Type, const char*>, 3> names{
+      {{ForceElement::Type::Force, "force"}, {ForceElement::Type::Thruster, "thruster"},
+       {ForceElement::Type::Torque, "torque"}}};
 };
 
 }  // namespace freeflex

@@ -8,7 +8,9 @@
 
 #include <Eigen/Dense>
 
+#include "freeflex/enum_names.hpp"
 #include "freeflex/model/instant.hpp"  // Instant: time plus the piece it belongs to
+#include "freeflex/validation.hpp"
 
 namespace freeflex {
 
@@ -26,8 +28,9 @@ struct VariableChange {
   bool active() const { return static_cast<bool>(enter_piece); }
 };
 
-/// x' = f(t, x). `rhs` must not throw; it returns false to report a failure (the message
-/// is then taken from `last_error`, if set).
+/// x' = f(t, x). `rhs` and `jacobian` are callbacks: they write into the buffer they are
+/// handed. `rhs` must not throw; it returns false to report a failure (the message is then
+/// taken from `last_error`, if set).
 struct OdeSystem {
   int dim = 0;
   std::function<bool(const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xdot)>
@@ -55,9 +58,21 @@ struct IntegratorOptions {
   std::function<void(double t)> progress;
 };
 
+/// Every setting out of range ("rtol = -1, expected a finite value > 0"); empty when valid.
+std::vector<FieldProblem> problems(const IntegratorOptions& options);
+/// Throws std::invalid_argument listing problems(options); the defaults are valid.
+void validate(const IntegratorOptions& options);
+
+/// The outcome of an integration, shared by the simulations built on it.
+enum class IntegrationStatus {
+  Completed,  ///< every output time was reached
+  Failed,     ///< CVODE or the right-hand side failed; the message says why and when
+};
+
 struct IntegrationResult {
-  bool ok = false;
-  std::string message;        ///< CVODE's reason when !ok
+  IntegrationStatus status = IntegrationStatus::Failed;
+  std::string message;        ///< CVODE's reason when not ok()
+  bool ok() const { return status == IntegrationStatus::Completed; }
   double failure_time = 0.0;  ///< time reached when it failed
   Eigen::VectorXd t;          ///< output times actually reached
   Eigen::MatrixXd x;          ///< one row per output time
@@ -84,5 +99,19 @@ bool roundoff_span(double a, double b);
 IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eigen::VectorXd>& x0,
                             const std::vector<double>& output_times, const std::vector<double>& breakpoints,
                             const IntegratorOptions& options);
+
+template <>
+struct EnumNames<IntegratorOptions::Method> {
+  static constexpr const char* what = "integration method";
+  static constexpr std::array<std::pair<IntegratorOptions::Method, const char*>, 2> names{
+      {{IntegratorOptions::Method::Bdf, "bdf"}, {IntegratorOptions::Method::Adams, "adams"}}};
+};
+
+template <>
+struct EnumNames<IntegrationStatus> {
+  static constexpr const char* what = "integration status";
+  static constexpr std::array<std::pair<IntegrationStatus, const char*>, 2> names{
+      {{IntegrationStatus::Completed, "completed"}, {IntegrationStatus::Failed, "failed"}}};
+};
 
 }  // namespace freeflex

@@ -31,9 +31,15 @@ struct SimulationOptions {
   Variables first_order_variables = Variables::Modal;  ///< of the first-order model
 };
 
+/// Every setting out of range, those of `integrator` as "integrator.rtol"; empty when valid.
+std::vector<FieldProblem> problems(const SimulationOptions& options);
+/// Throws std::invalid_argument listing problems(options); the defaults are valid.
+void validate(const SimulationOptions& options);
+
 struct SimulationResult {
-  bool ok = false;
+  IntegrationStatus status = IntegrationStatus::Failed;
   std::string message;     ///< reason of a failure, with the time reached
+  bool ok() const { return status == IntegrationStatus::Completed; }
   Eigen::VectorXd t;       ///< output times reached
   Eigen::MatrixXd z;       ///< totals [Rx, Ry, θ, q], one row per time
   Eigen::MatrixXd z_dot;   ///< their rates
@@ -66,5 +72,12 @@ PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitat
 PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const Excitation& excitation,
                                                std::shared_ptr<const RigidTrajectory> nominal,
                                                const SimulationOptions& options);
+
+template <>
+struct EnumNames<SimulationOptions::Variables> {
+  static constexpr const char* what = "integration variables";
+  static constexpr std::array<std::pair<SimulationOptions::Variables, const char*>, 2> names{
+      {{SimulationOptions::Variables::Physical, "physical"}, {SimulationOptions::Variables::Modal, "modal"}}};
+};
 
 }  // namespace freeflex

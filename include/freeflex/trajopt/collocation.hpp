@@ -33,7 +33,9 @@
 // where the smoothness term is the exact ∫ u'² dt of the piecewise linear / quadratic
 // control.
 //
-// Not thread-safe: evaluations share a cache of f and ∂f at the last w.
+// Evaluation is const and thread-safe: f and ∂f at the last w are cached in a Data
+// workspace that the caller owns (create_data()), one per thread.
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -48,6 +50,35 @@ namespace freeflex {
 
 class CollocationNlp {
  public:
+  /// Workspace of one thread of evaluation: the results of the calls that take it, and
+  /// the cache of f and ∂f at the last w they were given.
+  struct Data {
+    Eigen::VectorXd constraints;  ///< g(w), from constraints()
+    Eigen::VectorXd jacobian;     ///< Jacobian values (triplet order), from jacobian_values()
+    Eigen::VectorXd hessian;      ///< Hessian values (triplet order), from hessian_values()
+    /// Cache and scratch (no meaning outside the NLP's own calls).
+    struct Cache {
+      Eigen::VectorXd w;  // the w that f (and J when jac_valid) describe
+      bool f_valid = false, jac_valid = false;
+      Eigen::MatrixXd f;             // 6 x P, f at the points
+      Eigen::MatrixXd J;             // 6 x (nz P)
+      Eigen::MatrixXd xc, fc, Jc;    // HS compressed: 6 x N, 6 x N, 6 x (nz N)
+      Eigen::MatrixXd lam_eff, nu_eff;  // 6 x P
+      Eigen::MatrixXd D, Y, B;          // HS compressed: 6 x q, nz x q, q x q
+      RigidDynamics::Data dyn;
+    } cache;
+  };
+
+  /// Variable and constraint bounds; infinite ones are ±infinity.
+  struct Bounds {
+    Eigen::VectorXd w_lower, w_upper, g_lower, g_upper;
+  };
+
+  /// Midpoint states and controls of every interval (HS forms), N x 6 and N x nu.
+  struct Midpoints {
+    Eigen::MatrixXd x, u;
+  };
+
   /// Uniform mesh of `intervals` intervals. Validates the problem (std::invalid_argument).
   CollocationNlp(const FlexibleBody& body, const ManeuverProblem& problem, Transcription transcription, int intervals);
   /// Mesh fractions σ_k (> 0; normalized to sum 1).
@@ -81,32 +112,34 @@ class CollocationNlp {
   double mid_fraction(int k) const { return tau_mid_[k]; }
   double duration(const Eigen::Ref<const Eigen::VectorXd>& w) const;
 
-  /// Bounds; infinite ones are ±infinity.
-  void bounds(Eigen::Ref<Eigen::VectorXd> w_lower, Eigen::Ref<Eigen::VectorXd> w_upper,
-              Eigen::Ref<Eigen::VectorXd> g_lower, Eigen::Ref<Eigen::VectorXd> g_upper) const;
+  Data create_data() const;
+  Bounds bounds() const;
 
   double objective(const Eigen::Ref<const Eigen::VectorXd>& w) const;
-  void objective_gradient(const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::Ref<Eigen::VectorXd> grad) const;
-  void constraints(const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::Ref<Eigen::VectorXd> g) const;
+  Eigen::VectorXd objective_gradient(const Eigen::Ref<const Eigen::VectorXd>& w) const;
+  /// g(w), into data.constraints.
+  const Eigen::VectorXd& constraints(Data& data, const Eigen::Ref<const Eigen::VectorXd>& w) const;
 
   /// Jacobian of g in triplet form (0-based); the structure never changes.
   int jacobian_nonzeros() const { return static_cast<int>(jac_rows_.size()); }
   const std::vector<int>& jacobian_rows() const { return jac_rows_; }
   const std::vector<int>& jacobian_cols() const { return jac_cols_; }
-  void jacobian_values(const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::Ref<Eigen::VectorXd> values) const;
+  /// The values of the Jacobian's triplets at w, into data.jacobian.
+  const Eigen::VectorXd& jacobian_values(Data& data, const Eigen::Ref<const Eigen::VectorXd>& w) const;
 
   /// Lower triangle (row >= col) of ∇²(obj_factor J + λᵀ g), triplets, no duplicates.
   int hessian_nonzeros() const { return static_cast<int>(hess_rows_.size()); }
   const std::vector<int>& hessian_rows() const { return hess_rows_; }
   const std::vector<int>& hessian_cols() const { return hess_cols_; }
-  void hessian_values(const Eigen::Ref<const Eigen::VectorXd>& w, double obj_factor,
-                      const Eigen::Ref<const Eigen::VectorXd>& lambda, Eigen::Ref<Eigen::VectorXd> values) const;
+  /// The values of the Hessian's triplets at (w, obj_factor, λ), into data.hessian.
+  const Eigen::VectorXd& hessian_values(Data& data, const Eigen::Ref<const Eigen::VectorXd>& w, double obj_factor,
+                                        const Eigen::Ref<const Eigen::VectorXd>& lambda) const;
 
   /// max |defect| over all collocation rows (interpolation rows included).
   double max_defect(const Eigen::Ref<const Eigen::VectorXd>& w) const;
 
-  /// Midpoint states and controls of every interval, N x 6 and N x nu (HS forms only).
-  void midpoints(const Eigen::Ref<const Eigen::VectorXd>& w, Eigen::MatrixXd& x_mid, Eigen::MatrixXd& u_mid) const;
+  /// Midpoint states and controls of every interval (HS forms only).
+  Midpoints midpoints(const Eigen::Ref<const Eigen::VectorXd>& w) const;
 
   /// The continuous trajectory that w stands for (see trajopt/trajectory.hpp).
   std::shared_ptr<const CollocationTrajectory> trajectory(const Eigen::Ref<const Eigen::VectorXd>& w) const;
@@ -131,18 +164,28 @@ class CollocationNlp {
     double qbar;      // Σ_k σ_k q_k: the quadrature weight of its energy term, / T
   };
 
+  // Construction (collocation_structure.cpp): the layout, then the rows and sparsity.
   void build();
+  void build_layout();
+  void build_defect_rows();
+  void build_rate_rows();
+  void build_jacobian_structure();
+  void build_hessian_structure();
+  void build_compressed_hessian_structure(const std::function<int(int, int)>& slot);
+
   double T_of(const Eigen::Ref<const Eigen::VectorXd>& w) const;
   void check_size(const Eigen::Ref<const Eigen::VectorXd>& w) const;
-  void ensure_f(const Eigen::Ref<const Eigen::VectorXd>& w) const;
-  void ensure_jac(const Eigen::Ref<const Eigen::VectorXd>& w) const;
-  void compressed_midpoints(const Eigen::Ref<const Eigen::VectorXd>& w, bool with_jacobian) const;
+  void ensure_f(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w) const;
+  void ensure_jac(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w) const;
+  void compressed_midpoints(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w, bool with_jacobian) const;
+  void constraints_into(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w,
+                        Eigen::Ref<Eigen::VectorXd> g) const;
   int first_point(int interval) const { return tr_ == Transcription::HermiteSimpson ? 2 * interval : interval; }
   int points_per_interval() const { return tr_ == Transcription::Trapezoidal ? 2 : 3; }
   /// Control point index (into ctrl_) of the i-th control of interval k (i < points_per_interval).
   int ctrl_of(int k, int i) const;
   double smooth_quadratic(const Eigen::Ref<const Eigen::VectorXd>& w, int interval) const;
-  void compressed_jacobian_block(int k, double T) const;  // fills D_ for interval k
+  void compressed_jacobian_block(Data::Cache& c, int k, double T) const;  // fills c.D for interval k
 
   RigidDynamics dyn_;
   ManeuverProblem problem_;
@@ -178,16 +221,6 @@ class CollocationNlp {
   std::vector<std::vector<int>> denseT_slots_;  // HS compressed: [interval], (T, dense_trow_), (T, T)
   int TT_slot_ = -1;
   std::vector<int> fcols_;  // columns of z on which f depends
-
-  // Cache of f and ∂f at the points (and, compressed, at the midpoints).
-  mutable Eigen::VectorXd w_f_;  // the w that f_ (and J_ when jac_valid_) describe
-  mutable bool f_valid_ = false, jac_valid_ = false;
-  mutable Eigen::MatrixXd f_;    // 6 x P
-  mutable Eigen::MatrixXd J_;    // 6 x (nz P)
-  mutable Eigen::MatrixXd xc_, fc_, Jc_;  // HS compressed: 6 x N, 6 x N, 6 x (nz N)
-  mutable Eigen::MatrixXd Hbuf_; // nz x nz
-  mutable Eigen::MatrixXd lam_eff_, nu_eff_;  // 6 x P
-  mutable Eigen::MatrixXd D_, Y_, B_;         // HS compressed: 6 x q, nz x q, q x q
 };
 
 /// A starting point for `nlp` from `guess` (see InitialGuess), controls clipped to their

@@ -18,6 +18,8 @@
 #include <Eigen/Dense>
 
 #include "freeflex/dynamics/flexible_body.hpp"
+#include "freeflex/enum_names.hpp"
+#include "freeflex/validation.hpp"
 
 namespace freeflex {
 
@@ -63,7 +65,16 @@ enum class Transcription {
   /// eliminated (x_c from the interpolation formula): a KKT system ~40% smaller.
   HermiteSimpsonCompressed,
 };
-const char* to_string(Transcription t);
+
+template <>
+struct EnumNames<Transcription> {
+  static constexpr const char* what = "transcription";
+  static constexpr std::array<std::pair<Transcription, const char*>, 3> names{
+      {{Transcription::Trapezoidal, "trapezoidal"},
+       {Transcription::HermiteSimpson, "hermite_simpson"},
+       {Transcription::HermiteSimpsonCompressed, "hermite_simpson_compressed"}}};
+};
+
 /// True for the Hermite–Simpson forms (controls at interval midpoints too).
 inline bool has_midpoints(Transcription t) { return t != Transcription::Trapezoidal; }
 
@@ -80,9 +91,11 @@ struct InitialGuess {
   bool rollout = false;
 };
 
+/// Settings of the transcription and of Ipopt. The defaults are those of a design file's
+/// [maneuver] section.
 struct TrajoptOptions {
-  Transcription transcription = Transcription::HermiteSimpsonCompressed;
-  int intervals = 50;  ///< N >= 1, uniform mesh
+  Transcription transcription = Transcription::HermiteSimpson;
+  int intervals = 100;  ///< N >= 1, uniform mesh
 
   /// Mesh refinement rounds after the first solve (0: off). Each round estimates the
   /// local state error of every interval, e_k = max_i ∫_k |x_i' − f_i(x, u)| dt with the
@@ -107,7 +120,11 @@ struct TrajoptOptions {
   int log_level = 5;      ///< Ipopt print level of that copy (0-12)
 };
 
-/// Throws std::invalid_argument listing every problem found (sizes, ranges, orderings).
+/// Every problem found (sizes, ranges, orderings), in field order; empty when valid.
+/// `element_count`: the force elements of the body the actuator indices refer to.
+std::vector<FieldProblem> problems(const ManeuverProblem& problem, int element_count);
+std::vector<FieldProblem> problems(const TrajoptOptions& options);
+/// Throws std::invalid_argument listing every problem found.
 void validate(const FlexibleBody& body, const ManeuverProblem& problem);
 void validate(const TrajoptOptions& options);
 

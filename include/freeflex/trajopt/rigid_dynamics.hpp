@@ -44,18 +44,24 @@ class RigidDynamics {
   /// Generalized force [F_X, F_Y, M_o] of actuator k per unit command at q = 0.
   Eigen::Vector3d actuator_force(int k, double theta) const;
 
+  /// Results of one evaluation (make one with create_data()); the model is const and
+  /// serves any number of threads, each with its own Data.
+  struct Data {
+    Vector6d f = Vector6d::Zero();  ///< f(x, u), from calc() and calc_diff()
+    Eigen::MatrixXd J;              ///< [∂f/∂x, ∂f/∂u] (6 x nz()), from calc_diff()
+    Eigen::MatrixXd H;              ///< Σ_i λ_i ∂²f_i/∂(x,u)² (nz() x nz(), symmetric), from calc_hessian()
+  };
+  Data create_data() const;
+
   /// f(x, u). x has 6 entries, u has nu().
-  void eval(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& u,
-            Eigen::Ref<Eigen::VectorXd> f) const;
   Vector6d eval(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& u) const;
-
-  /// f(x, u) and J = [∂f/∂x, ∂f/∂u] (6 x nz()); every entry of J is written.
-  void jacobian(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& u,
-                Eigen::Ref<Eigen::VectorXd> f, Eigen::Ref<Eigen::MatrixXd> J) const;
-
-  /// H = Σ_i lambda_i ∂²f_i/∂(x,u)² (nz() x nz(), symmetric, every entry written).
-  void hessian_contraction(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& u,
-                           const Eigen::Ref<const Eigen::VectorXd>& lambda, Eigen::Ref<Eigen::MatrixXd> H) const;
+  /// f(x, u) and J = [∂f/∂x, ∂f/∂u] into data.f, data.J (every entry of J written).
+  void calc_diff(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+                 const Eigen::Ref<const Eigen::VectorXd>& u) const;
+  /// H = Σ_i lambda_i ∂²f_i/∂(x,u)² into data.H (every entry written).
+  const Eigen::MatrixXd& calc_hessian(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                      const Eigen::Ref<const Eigen::VectorXd>& u,
+                                      const Eigen::Ref<const Eigen::VectorXd>& lambda) const;
 
   /// Structural nonzeros of J, (row, col), row-major order. Entries outside are zero for
   /// every (x, u).

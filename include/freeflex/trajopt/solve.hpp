@@ -8,7 +8,7 @@
 // in N). TrajoptOptions::ipopt_options override any of these. Mesh-refinement rounds start at mu_init 1e-6 from the interpolated solution.
 //
 //   TrajoptResult r = solve_maneuver(body, problem, options);
-//   if (r.success()) r.trajectory->at(Instant::at(t));  // a RigidTrajectory
+//   if (r.ok()) r.trajectory->at(Instant::at(t));  // a RigidTrajectory
 //
 // Bad input (see validate() in trajopt/problem.hpp) throws std::invalid_argument before
 // any work; a numerical outcome (infeasible, iteration limit, ...) is a result with a
@@ -19,6 +19,7 @@
 
 #include <Eigen/Dense>
 
+#include "freeflex/sim/maneuver.hpp"
 #include "freeflex/trajopt/problem.hpp"
 #include "freeflex/trajopt/trajectory.hpp"
 
@@ -31,7 +32,17 @@ enum class TrajoptStatus {
   MaxIterations,     ///< Ipopt Maximum_Iterations_Exceeded (or CPU time)
   Failed,            ///< anything else (restoration failure, too small steps, evaluation error, ...)
 };
-const char* to_string(TrajoptStatus s);
+
+template <>
+struct EnumNames<TrajoptStatus> {
+  static constexpr const char* what = "trajectory optimization status";
+  static constexpr std::array<std::pair<TrajoptStatus, const char*>, 5> names{
+      {{TrajoptStatus::Solved, "solved"},
+       {TrajoptStatus::SolvedAcceptable, "solved_acceptable"},
+       {TrajoptStatus::Infeasible, "infeasible"},
+       {TrajoptStatus::MaxIterations, "max_iterations"},
+       {TrajoptStatus::Failed, "failed"}}};
+};
 
 /// One solve on one mesh (mesh refinement makes several).
 struct MeshRound {
@@ -44,9 +55,9 @@ struct MeshRound {
 
 struct TrajoptResult {
   TrajoptStatus status = TrajoptStatus::Failed;
+  std::string message;  ///< Ipopt's status in words, with "not a solution" when not ok()
   /// Solved or SolvedAcceptable: the arrays below are an optimum of the last NLP.
-  bool success() const { return status == TrajoptStatus::Solved || status == TrajoptStatus::SolvedAcceptable; }
-  std::string message;  ///< Ipopt's status in words, with "not a solution" when !success()
+  bool ok() const { return status == TrajoptStatus::Solved || status == TrajoptStatus::SolvedAcceptable; }
 
   double objective = 0.0;    ///< J at the returned point
   int iterations = 0;        ///< Ipopt iterations, summed over mesh rounds
@@ -78,5 +89,10 @@ struct TrajoptResult {
 };
 
 TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& problem, const TrajoptOptions& options);
+
+/// The solution flown open loop by the problem's actuators: its motion, commands (zero
+/// after the duration) and knots, for the perturbation solution and the controllers.
+/// Throws std::invalid_argument when the result is not ok() or has no trajectory.
+FlownManeuver flown_maneuver(const TrajoptResult& result, const ManeuverProblem& problem);
 
 }  // namespace freeflex

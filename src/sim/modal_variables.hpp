@@ -9,7 +9,8 @@
 // by the rigid motion each elastic mode carries with it, r_s = r + T q (T = M_rr⁻¹ M_rq
 // at rest, rotated into the inertial frame), so they too see no elastic oscillation to
 // first order. The change is exact: it alters how many steps CVODE takes, never the
-// equations.
+// equations. Private to src/ (SimulationOptions::Variables chooses it); its members are
+// the callbacks of an integrate() call, which write into the buffers they are handed.
 #include <functional>
 #include <memory>
 

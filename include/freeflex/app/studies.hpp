@@ -1,0 +1,145 @@
+#pragma once
+// The studies a design asks for, each a library call with a typed result a program (the
+// command line, Python) can hold: free vibration, maneuver, simulation and suppression.
+// They compute and report progress; the command line writes their files and
+// summary.json from the results (app/run.hpp).
+#include <functional>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/control/metrics.hpp"
+#include "freeflex/control/suppression.hpp"
+#include "freeflex/control/switch_time.hpp"
+#include "freeflex/enum_names.hpp"
+#include "freeflex/io/design.hpp"
+#include "freeflex/trajopt/solve.hpp"
+
+namespace freeflex {
+
+/// The outcome of a study: ok, or failed for the reason in its message (a numerical
+/// failure: the command line exits 1).
+enum class StudyStatus { Ok, Failed };
+
+template <>
+struct EnumNames<StudyStatus> {
+  static constexpr const char* what = "study status";
+  static constexpr std::array<std::pair<StudyStatus, const char*>, 2> names{
+      {{StudyStatus::Ok, "ok"}, {StudyStatus::Failed, "failed"}}};
+};
+
+/// Where a study reports while it runs: progress lines on `log` (may be null), and each
+/// warning as it happens (every warning is also kept in the result).
+struct StudyLog {
+  std::ostream* log = nullptr;
+  std::function<void(const std::string&)> warn;  ///< optional; must not throw
+};
+
+/// Elastic natural frequencies of a design's beam with `noa` functions.
+struct ModeTable {
+  Eigen::VectorXd omega_rad_s, freq_hz, lambda;
+};
+ModeTable mode_table(const Design& design, int noa);
+
+/// [free_vibration]: frequencies over the NOA sweep, mode shapes against the exact beam.
+struct FreeVibrationStudyResult {
+  StudyStatus status = StudyStatus::Ok;
+  std::string message;
+  bool ok() const { return status == StudyStatus::Ok; }
+  std::vector<std::string> warnings;
+
+  std::vector<std::string> table_header;  ///< the frequency table (TABLE.csv): one row per (NOA, mode)
+  Eigen::MatrixXd table;
+  struct Frequencies {
+    int noa = 0;
+    Eigen::VectorXd lambda, omega_rad_s;  ///< the elastic modes reported at this NOA
+  };
+  std::vector<Frequencies> frequencies;
+  struct ModeShape {
+    std::string name;
+    int noa = 0, mode = 0;
+    std::vector<std::string> header;  ///< s_m, x_m, w_freeflex[, w_exact]
+    Eigen::MatrixXd data;
+    std::optional<double> max_abs_difference;  ///< against the exact free-free mode, where it applies
+  };
+  std::vector<ModeShape> mode_shapes;
+};
+FreeVibrationStudyResult run_free_vibration_study(const Design& design, const StudyLog& log = {});
+
+/// [maneuver]: the optimal rigid maneuver.
+struct ManeuverStudyResult {
+  StudyStatus status = StudyStatus::Failed;
+  std::string message;
+  bool ok() const { return status == StudyStatus::Ok; }
+  std::vector<std::string> warnings;
+
+  TrajoptResult trajopt;
+  std::optional<FlownManeuver> flown;  ///< when solved: what [simulation] and [controller] fly
+};
+/// `quiet`: no Ipopt log on the log stream (the design's own `quiet` applies too).
+ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const StudyLog& log = {});
+
+/// [simulation]: the full model and the perturbation solution, their differences.
+struct SimulationStudyResult {
+  StudyStatus status = StudyStatus::Ok;
+  std::string message;
+  bool ok() const { return status == StudyStatus::Ok; }
+  std::vector<std::string> warnings;
+
+  double loads_end_s = 0.0;      ///< no load acts after it
+  bool about_maneuver = false;   ///< the nominal is the optimized maneuver (else the zero-order simulation)
+  double duration_s = 0.0;
+  /// A solution, its table (nonlinear.csv or perturbation.csv) and its figures of merit.
+  struct Solution {
+    SimulationResult run;
+    long zero_order_rhs_evaluations = -1, first_order_rhs_evaluations = -1;  ///< perturbation only
+    std::vector<std::string> header;
+    Eigen::MatrixXd table;         ///< empty when the run failed
+    double residual_vibration_energy_J = 0.0;
+    /// Full model: drift of energy, linear and angular momentum after the loads end,
+    /// relative to their peaks.
+    std::optional<Eigen::Vector3d> drifts;
+  };
+  std::optional<Solution> nonlinear, perturbation;
+  struct Differences {
+    double max_abs_dR_m = 0.0, max_abs_dtheta_rad = 0.0, max_abs_dq = 0.0, max_rigid_difference = 0.0;
+  };
+  std::optional<Differences> difference_nonlinear_minus_perturbation;  ///< when both completed
+};
+SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver = nullptr,
+                                           const StudyLog& log = {});
+
+/// [controller] (and [bang_bang]): TV-LQR against the open loop, with metrics per case.
+struct SuppressionStudyResult {
+  StudyStatus status = StudyStatus::Ok;
+  std::string message;
+  bool ok() const { return status == StudyStatus::Ok; }
+  std::vector<std::string> warnings;
+
+  SuppressionResult chain;  ///< nominal motion, open loop, TV-LQR, closed loops
+  /// A bang-bang rotation leaving the first `modes` elastic modes at rest; without
+  /// `modes`, the reason none was designed.
+  struct BangBang {
+    std::optional<int> modes;
+    std::string status;  ///< "ok" or the reason it was not designed / did not converge
+    std::optional<SwitchTimeResult> design;
+  };
+  std::vector<BangBang> bang_bang;
+  /// One response compared in comparison.csv: a case (open_loop, tvlqr, bang_bang_kK) on
+  /// a model (first_order, nonlinear).
+  struct Case {
+    std::string name, model;
+    Eigen::VectorXd t;
+    Eigen::MatrixXd z, z_dot, commands;  ///< commands: every element (loads and actuators)
+    double saturated_fraction = 0.0;
+    ResponseMetrics metrics;
+  };
+  std::vector<Case> cases;
+};
+SuppressionStudyResult run_suppression_study(const Design& design, const ManeuverStudyResult* maneuver = nullptr,
+                                             const StudyLog& log = {});
+
+}  // namespace freeflex

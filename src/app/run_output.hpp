@@ -1,0 +1,41 @@
+#pragma once
+// Where a run's files go: every file written whole into the staging directory, counted
+// among the run's files; figures whose rendering fails become warnings. Without a
+// directory nothing is written (a run for its results only). Private to src/.
+#include <functional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/io/plot.hpp"
+
+namespace freeflex::detail {
+
+class RunOutput {
+ public:
+  /// Files go into `dir`; messages name `shown_dir` (where they end up) if it is given.
+  /// Warnings are printed on `warnings_log` (may be null) as they happen.
+  RunOutput(std::string dir, std::ostream* warnings_log, std::string shown_dir = {})
+      : dir_(std::move(dir)), shown_dir_(shown_dir.empty() ? dir_ : std::move(shown_dir)), log_(warnings_log) {}
+  void write(const std::string& name, const std::string& content);
+  void csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data);
+  /// Renders a plot (unless plots are off); a failure becomes a warning, not an error.
+  void plot(const PlotSpec& spec, bool enabled);
+  void warn(const std::string& message);
+  const std::string& dir() const { return dir_; }
+  const std::vector<std::string>& files() const { return files_; }
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+ private:
+  std::string shown(std::string text) const;
+  /// Writes `name` in dir() through `writer` and counts it among the run's files.
+  void stream(const std::string& name, const std::function<void(std::ostream&)>& writer);
+
+  std::string dir_, shown_dir_;
+  std::ostream* log_;
+  std::vector<std::string> files_, warnings_;
+};
+
+}  // namespace freeflex::detail

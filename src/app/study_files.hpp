@@ -1,0 +1,34 @@
+#pragma once
+// What the command line makes of each study's result: its files (CSV tables, figures)
+// through the run's output, and its entry in summary.json. Private to src/.
+#include <nlohmann/json.hpp>
+
+#include "app/run_output.hpp"
+#include "freeflex/app/studies.hpp"
+
+namespace freeflex::detail {
+
+using Json = nlohmann::ordered_json;
+
+/// A vector as a JSON array (non-finite entries become null when dumped).
+Json json_array(const Eigen::VectorXd& v);
+/// "ok" when the result is ok, else its status name or reason.
+template <class R>
+std::string status_text(const R& r) {
+  return r.ok() ? "ok" : to_string(r.status);
+}
+
+void write_free_vibration(const Design& design, const FreeVibrationStudyResult& r, RunOutput& out);
+Json to_json(const Design& design, const FreeVibrationStudyResult& r);
+
+void write_maneuver(const Design& design, const ManeuverStudyResult& r, RunOutput& out);
+Json to_json(const ManeuverStudyResult& r);
+
+void write_simulation(const Design& design, const SimulationStudyResult& r, RunOutput& out);
+Json to_json(const SimulationStudyResult& r);
+
+void write_suppression(const Design& design, const SuppressionStudyResult& r, RunOutput& out);
+/// Empty (null) when the study has no entry (its open loop failed: the run's message says why).
+Json to_json(const Design& design, const SuppressionStudyResult& r);
+
+}  // namespace freeflex::detail

@@ -1,0 +1,93 @@
+// [beam]: a uniform beam or segments, the reference point o, a hub and point masses.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "io/design_sections.hpp"
+
+namespace freeflex::io_detail {
+
+void read_beam(Section& root, Design& d) {
+  Section b = root.table("beam");
+  if (!b.present()) {
+    b.problem("beam", "section [beam] is required");
+    return;
+  }
+  BeamProperties& p = d.beam;
+  auto segs = b.table_array("segment");
+  const bool uniform_keys = b.has("length_m") || b.has("mass_kg") || b.has("mass_per_length_kg_m") ||
+                            b.has("bending_stiffness_Nm2");
+  if (!segs.empty() && uniform_keys) {
+    b.problem("segment", "beam: give either length_m, mass and bending_stiffness_Nm2 (uniform) or "
+                         "[[beam.segment]] tables (piecewise), not both");
+  } else if (segs.empty()) {
+    auto L = b.number("length_m", kLength, true);
+    std::optional<double> mass;
+    if (b.has("mass_kg") && b.has("mass_per_length_kg_m")) {
+      b.problem("mass_kg", "beam: give mass_kg or mass_per_length_kg_m, not both");
+      b.number("mass_kg", kMass, false);
+      b.number("mass_per_length_kg_m", kMassPerLength, false);
+    } else if (b.has("mass_per_length_kg_m")) {
+      auto mu = b.number("mass_per_length_kg_m", kMassPerLength, true);
+      if (mu && L) mass = *mu * *L;
+    } else {
+      mass = b.number("mass_kg", kMass, true);
+    }
+    auto ei = b.number("bending_stiffness_Nm2", kStiffness, true);
+    if (L && mass && ei) p.segments.push_back({*L, *mass / *L, *ei});
+  } else {
+    bool ok = true;
+    for (auto& s : segs) {
+      auto L = s.number("length_m", kLength, true);
+      auto mu = s.number("mass_per_length_kg_m", kMassPerLength, true);
+      auto ei = s.number("bending_stiffness_Nm2", kStiffness, true);
+      s.finish();
+      if (L && mu && ei) p.segments.push_back({*L, *mu, *ei});
+      else ok = false;
+    }
+    if (!ok) p.segments.clear();
+    double total = 0.0;
+    for (const auto& seg : p.segments) total += seg.length_m;
+    if (total > lim::kMaxLength_m)
+      b.problem("segment", "beam: the segments add up to " + shortest(total) + " m; at most " +
+                               shortest(lim::kMaxLength_m) + " m");
+  }
+  double length = 0.0, total_mass = 0.0;
+  for (const auto& s : p.segments) {
+    length += s.length_m;
+    total_mass += s.mass_per_length_kg_m * s.length_m;
+  }
+  // mass_kg is checked where it is given; a mass that comes from mass per length is checked here
+  if (!p.segments.empty() && (!b.has("mass_kg") || !segs.empty()) &&
+      (total_mass < lim::kMinMass_kg || total_mass > lim::kMaxMass_kg))
+    b.problem(segs.empty() ? "mass_per_length_kg_m" : "segment",
+              "beam: the mass per length gives a beam of " + shortest(total_mass) + " kg; it must be within [" +
+                  shortest(lim::kMinMass_kg) + ", " + shortest(lim::kMaxMass_kg) + "] kg (the supported range)");
+  const bool have_length = !p.segments.empty();
+  const Range on_beam = have_length ? Range::closed(0.0, length) : Range::nonnegative();
+  // o strictly inside, and not within L/1000 of an end: the full model's step count grows
+  // like 1/distance^2 there, and at 1e-6 L its modes at rest can no longer be computed
+  const Range inside =
+      have_length ? Range{0.0, length, true, true}.supported(lim::kEndMargin * length, (1.0 - lim::kEndMargin) * length)
+                  : Range::positive();
+
+  if (b.has("reference_m")) p.reference_m = b.number("reference_m", inside, false);
+  Section hub = b.table("hub");
+  if (hub.present()) {
+    p.hub_mass_kg = hub.number("mass_kg", kMassOrZero, false).value_or(0.0);
+    p.hub_rotary_inertia_kgm2 =
+        hub.number("rotary_inertia_kgm2", Range::nonnegative().supported(-kInf, lim::kMaxRotaryInertia_kgm2), false)
+            .value_or(0.0);
+    hub.finish();
+  }
+  for (auto& s : b.table_array("point_mass")) {
+    auto pos = s.number("position_m", on_beam, true);
+    auto m = s.number("mass_kg", kMassOrZero, true);
+    s.finish();
+    if (pos && m) p.point_masses.push_back({*pos, *m});
+  }
+  b.finish();
+}
+
+
+}  // namespace freeflex::io_detail

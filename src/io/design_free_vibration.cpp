@@ -1,0 +1,40 @@
+// [free_vibration]: the NOA sweep of the frequency table and the mode shapes to export.
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "freeflex/model/basis.hpp"
+
+#include "io/design_sections.hpp"
+
+namespace freeflex::io_detail {
+
+void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
+  Section s = root.table("free_vibration");
+  if (!s.present()) return;
+  FreeVibrationStudy fv;
+  if (auto v = s.integer_array("noa_sweep", 1, kMaxNoa, false)) fv.noa_sweep.assign(v->begin(), v->end());
+  fv.modes = static_cast<int>(s.integer("modes", 1, kMaxNoa, false).value_or(fv.modes));
+  fv.paper_table = s.boolean("paper_table", false).value_or(fv.paper_table);
+  fv.table_name = s.string("table_name", false, true).value_or(fv.table_name);
+  outputs.named(s, "table_name", fv.table_name, {".csv"});
+  for (auto& m : s.table_array("mode_shape")) {
+    ModeShapeRequest r;
+    auto name = m.string("name", true, true);
+    r.noa = static_cast<int>(m.integer("noa", 1, kMaxNoa, false).value_or(d.noa));
+    auto mode = m.integer("mode", 1, r.noa, true);
+    r.points = static_cast<int>(m.integer("points", 2, 100000, false).value_or(r.points));
+    m.finish();
+    if (name) outputs.named(m, "name", *name, {".csv", ".gp", ".png"});
+    if (name && mode) {
+      r.name = *name;
+      r.mode = static_cast<int>(*mode);
+      fv.mode_shapes.push_back(r);
+    }
+  }
+  s.finish();
+  d.free_vibration = fv;
+}
+
+
+}  // namespace freeflex::io_detail

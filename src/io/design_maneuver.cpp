@@ -1,0 +1,150 @@
+// [maneuver]: the rigid maneuver to optimize (actuators, boundary states, objective,
+// duration) and how (transcription, mesh, Ipopt and its options).
+#include <cmath>
+#include <limits>
+
+#include "io/design_sections.hpp"
+
+namespace freeflex::io_detail {
+namespace {
+
+/// [maneuver.initial] / [maneuver.final]: position_m, theta_deg, velocity_m_s, theta_rate_deg_s.
+Eigen::Matrix<double, 6, 1> read_state(Section& m, const std::string& key) {
+  Eigen::Matrix<double, 6, 1> x = Eigen::Matrix<double, 6, 1>::Zero();
+  Section s = m.table(key);
+  if (!s.present()) return x;
+  auto pair = [&](const std::string& k, int at, double bound) {
+    auto v = s.number_array(k, Range().supported(-bound, bound), false);
+    if (!v) return;
+    if (v->size() != 2) {
+      s.problem(k, s.key_path(k) + " must have two components [x, y], got " + std::to_string(v->size()));
+      return;
+    }
+    x(at) = (*v)[0];
+    x(at + 1) = (*v)[1];
+  };
+  pair("position_m", 0, lim::kMaxPosition_m);
+  pair("velocity_m_s", 3, lim::kMaxVelocity_m_s);
+  // degrees only in files
+  x(2) = s.number("theta_deg", Range().supported(-lim::kMaxAngle_deg, lim::kMaxAngle_deg), false).value_or(0.0) * M_PI /
+         180.0;
+  x(5) =
+      s.number("theta_rate_deg_s", Range().supported(-lim::kMaxRate_deg_s, lim::kMaxRate_deg_s), false).value_or(0.0) *
+      M_PI / 180.0;
+  s.finish();
+  return x;
+}
+
+}  // namespace
+
+void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected) {
+  Section m = root.table("maneuver");
+  if (!m.present()) return;
+  ManeuverStudy st;
+  ManeuverProblem& p = st.problem;
+  TrajoptOptions& o = st.options;
+  // actuators by name, with their limits as bounds
+  bool names_ok = false;  // else the per-actuator sizes below are not checked
+  if (auto list = m.string_array("actuators", true)) {
+    p.actuators = actuator_indices(m, "actuators", *list, d, rejected);
+    names_ok = p.actuators.size() == list->size();
+    std::vector<double> lo, hi;
+    for (int e : p.actuators) {
+      const ActuatorSpec& a = d.actuators[static_cast<std::size_t>(e) - d.loads.size()];
+      st.actuator_names.push_back(a.element.name);
+      lo.push_back(a.limit > 0 ? -a.limit : -ManeuverProblem::inf);
+      hi.push_back(a.limit > 0 ? a.limit : ManeuverProblem::inf);
+    }
+    p.u_min = Eigen::Map<Eigen::VectorXd>(lo.data(), static_cast<Eigen::Index>(lo.size()));
+    p.u_max = Eigen::Map<Eigen::VectorXd>(hi.data(), static_cast<Eigen::Index>(hi.size()));
+  }
+  p.x_initial = read_state(m, "initial");
+  p.x_final = read_state(m, "final");
+  const std::string objective =
+      m.choice("objective", {"energy", "time", "smooth", "weighted"}, false).value_or("energy");
+  const bool time_objective = objective == "time" || (objective == "weighted" && m.has("time_weight"));
+  p.free_time = m.boolean("free_duration", false).value_or(time_objective);
+  if (objective == "time" && !p.free_time)
+    m.problem("free_duration", m.key_path("free_duration") + " = false, but objective \"time\" needs a free duration");
+  // A value given but rejected (its problem is reported) reads as NaN, so that the checks
+  // of other sections against it stay silent instead of quoting a default the file lacks.
+  auto duration = [&](const char* key, bool required, double fallback) {
+    const auto v = m.number(key, kTime, required);
+    return v ? *v : (m.has(key) || required ? std::numeric_limits<double>::quiet_NaN() : fallback);
+  };
+  p.t_min_s = duration("duration_min_s", false, p.t_min_s);
+  p.t_max_s = duration("duration_max_s", false, p.t_max_s);
+  // a free duration starts in the middle of its bounds
+  p.duration_s = duration("duration_s", !p.free_time, 0.5 * (p.t_min_s + p.t_max_s));
+  p.w_energy = objective == "energy" ? 1.0 : 0.0;
+  p.w_time = objective == "time" ? 1.0 : 0.0;
+  p.w_smooth = objective == "smooth" ? 1.0 : 0.0;
+  if (objective == "weighted") {
+    p.w_energy = m.number("energy_weight", kWeight, false).value_or(0.0);
+    p.w_time = m.number("time_weight", kWeight, false).value_or(0.0);
+    p.w_smooth = m.number("smooth_weight", kWeight, false).value_or(0.0);
+  } else {
+    for (const char* k : {"energy_weight", "time_weight", "smooth_weight"})
+      if (m.has(k)) m.problem(k, m.key_path(k) + " applies to objective = \"weighted\" only");
+    for (const char* k : {"energy_weight", "time_weight", "smooth_weight"}) m.number(k, Range(), false);
+  }
+  // Optional arrays with one entry per actuator (their sizes are the library's check).
+  auto per_actuator = [&](const char* key, const Range& range, auto& target) {
+    if (auto v = m.number_array(key, range, false))
+      target = Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(v->data(), static_cast<Eigen::Index>(v->size())));
+  };
+  per_actuator("actuator_weights", kWeight, p.energy_weights);
+  per_actuator("rate_limits", kCommand, p.du_max);
+  // What the library checks itself (bounds in order, weights, time weight and a free
+  // duration, sizes per actuator) is reported at the keys that set it.
+  FieldKeys keys{{"t_min_s", "duration_min_s"}, {"t_max_s", "duration_max_s"}, {"free_time", "free_duration"}};
+  if (m.has("duration_s")) keys.emplace_back("duration_s", "duration_s");
+  if (objective == "weighted")
+    keys.insert(keys.end(), {{"w_energy", "energy_weight"}, {"w_time", "time_weight"}, {"w_smooth", "smooth_weight"}});
+  if (names_ok) keys.insert(keys.end(), {{"energy_weights", "actuator_weights"}, {"du_max", "rate_limits"}});
+  report_field_problems(m, problems(p, static_cast<int>(d.loads.size() + d.actuators.size())), keys);
+
+  o.transcription = m.enumerated<Transcription>("transcription", false).value_or(o.transcription);
+  o.intervals = static_cast<int>(m.integer("intervals", 1, lim::kMaxIntervals, false).value_or(o.intervals));
+  o.mesh_refinements = static_cast<int>(m.integer("mesh_refinements", 0, 20, false).value_or(o.mesh_refinements));
+  o.mesh_tolerance = m.number("mesh_tolerance", Range::positive(), false).value_or(o.mesh_tolerance);
+  o.tol = m.number("tolerance", Range{0.0, 1.0, true, true}, false).value_or(o.tol);
+  o.max_iter = static_cast<int>(m.integer("max_iterations", 1, 1000000, false).value_or(o.max_iter));
+  st.quiet = m.boolean("quiet", false).value_or(st.quiet);
+  Section ip = m.table("ipopt");
+  if (ip.present()) {
+    for (const auto& [key, value] : ip.raw_entries()) {
+      // Debian's Ipopt is built with MUMPS only: any other solver makes Ipopt abort the
+      // whole process (it tries to load libhsl.so)
+      if (key == "linear_solver" && lower_trimmed(value) != "mumps") {
+        ip.problem(
+            key, ip.key_path(key) + " = \"" + value + "\", must be \"mumps\" (the only linear solver this Ipopt has)");
+        continue;
+      }
+      if (key == "linear_system_scaling" && lower_trimmed(value) == "mc19") {
+        ip.problem(key, ip.key_path(key) + " = \"" + value +
+                            "\", must be \"none\" or \"slack-based\" (MC19 is part of HSL, which this Ipopt lacks)");
+        continue;
+      }
+      // freeflex writes Ipopt's log there, into the run's directory with the other results
+      // (and replaced with them), so it must be a plain file name.
+      if (key == "output_file") {
+        if (!plain_name(value, ".")) {
+          ip.problem(key, ip.key_path(key) + " = \"" + value +
+                              "\", must be a file name of 1 to 64 letters, digits, '_', '-' or '.', not starting with "
+                              "'.' (Ipopt writes it into the output directory)");
+          continue;
+        }
+        outputs.named(ip, key, value, {""});
+      }
+      o.ipopt_options.emplace_back(key, value);
+    }
+  }
+  m.finish();
+  outputs.fixed("[maneuver]", "trajectory.csv");
+  for (const char* f : {"maneuver_states.gp", "maneuver_states.png", "maneuver_controls.gp", "maneuver_controls.png"})
+    outputs.fixed("[maneuver]", f);
+  d.maneuver = st;
+}
+
+}  // namespace freeflex::io_detail

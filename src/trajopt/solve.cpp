@@ -1,0 +1,123 @@
+// Optimal rigid maneuvers (trajopt/solve.hpp): the mesh-refinement loop around one Ipopt
+// solve per mesh, each warm-started from the interpolated solution of the last.
+#include "freeflex/trajopt/solve.hpp"
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "freeflex/trajopt/collocation.hpp"
+#include "trajopt/ipopt_adapter.hpp"
+
+namespace freeflex {
+
+namespace {
+
+/// Halves every interval whose error estimate exceeds tol.
+std::vector<double> refine(const std::vector<double>& sigma, const Eigen::VectorXd& err, double tol) {
+  std::vector<double> out;
+  for (std::size_t k = 0; k < sigma.size(); ++k) {
+    if (err(static_cast<Eigen::Index>(k)) > tol) {
+      out.push_back(0.5 * sigma[k]);
+      out.push_back(0.5 * sigma[k]);
+    } else {
+      out.push_back(sigma[k]);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Eigen::VectorXd TrajoptResult::control_at(double t_s) const {
+  if (!trajectory) return Eigen::VectorXd::Zero(u.cols());
+  return trajectory->control_at(t_s);
+}
+
+TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& problem, const TrajoptOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  validate(body, problem);
+  validate(options);
+
+  TrajoptResult res;
+  res.transcription = options.transcription;
+  std::vector<double> mesh(static_cast<std::size_t>(options.intervals), 1.0 / options.intervals);
+  InitialGuess guess = options.guess;
+  for (int round = 0;; ++round) {
+    const CollocationNlp nlp(body, problem, options.transcription, mesh);
+    const Eigen::VectorXd w0 = initial_point(nlp, guess);
+    const detail::NlpSolve run = detail::solve_nlp_ipopt(nlp, w0, options, round == 0, round > 0);
+    if (round == 0 && options.derivative_test != "none")
+      res.derivative_test_errors = detail::derivative_errors(run.log);
+    res.log += run.log;
+    res.status = run.status;
+    res.message = run.message;
+    res.iterations += run.iterations;
+    res.intervals = nlp.intervals();
+    MeshRound mr;
+    mr.intervals = nlp.intervals();
+    mr.iterations = run.iterations;
+    if (run.w.size() == nlp.num_variables()) {
+      const Eigen::VectorXd& w = run.w;
+      res.objective = nlp.objective(w);
+      res.duration_s = nlp.duration(w);
+      res.max_defect = nlp.max_defect(w);
+      res.trajectory = nlp.trajectory(w);
+      res.max_error_estimate = res.trajectory->interval_errors().maxCoeff();
+      res.t = res.trajectory->knot_times();
+      res.x = res.trajectory->knot_states();
+      res.u = res.trajectory->knot_controls();
+      const int N = nlp.intervals(), nu = nlp.dynamics().nu();
+      if (has_midpoints(options.transcription)) {
+        CollocationNlp::Midpoints mid = nlp.midpoints(w);
+        res.x_mid = std::move(mid.x);
+        res.u_mid = std::move(mid.u);
+        res.t_mid.resize(N);
+        for (int k = 0; k < N; ++k) res.t_mid(k) = nlp.mid_fraction(k) * res.duration_s;
+      } else {
+        res.t_mid.resize(0);
+        res.x_mid.resize(0, 6);
+        res.u_mid.resize(0, nu);
+      }
+      mr.objective = res.objective;
+      mr.max_defect = res.max_defect;
+      mr.max_error_estimate = res.max_error_estimate;
+    } else {
+      res.trajectory.reset();
+    }
+    res.rounds.push_back(mr);
+
+    if (!res.ok() || !res.trajectory || round >= options.mesh_refinements) break;
+    const Eigen::VectorXd err = res.trajectory->interval_errors();
+    if (err.maxCoeff() <= options.mesh_tolerance) break;
+    std::vector<double> finer = refine(nlp.mesh_fractions(), err, options.mesh_tolerance);
+    if (static_cast<int>(finer.size()) > options.max_intervals) {
+      res.message += "; mesh refinement stopped: " + std::to_string(finer.size()) + " intervals would exceed max_intervals = " +
+                     std::to_string(options.max_intervals);
+      break;
+    }
+    mesh = std::move(finer);
+    guess = InitialGuess{};
+    guess.solution = res.trajectory;
+  }
+  res.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return res;
+}
+
+FlownManeuver flown_maneuver(const TrajoptResult& result, const ManeuverProblem& problem) {
+  if (!result.ok() || !result.trajectory)
+    throw std::invalid_argument("flown_maneuver: the maneuver was not solved (" + result.message + ")");
+  FlownManeuver m;
+  m.motion = result.trajectory;
+  m.actuators = problem.actuators;
+  const std::shared_ptr<const CollocationTrajectory> traj = result.trajectory;
+  m.commands = [traj](const Instant& at, Eigen::Ref<Eigen::VectorXd> u) { u = traj->control_at(at); };
+  const Eigen::VectorXd& knots = traj->knot_times();
+  m.breakpoints.assign(knots.data(), knots.data() + knots.size());
+  m.duration_s = result.duration_s;
+  return m;
+}
+
+}  // namespace freeflex
