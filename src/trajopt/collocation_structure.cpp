@@ -26,7 +26,6 @@ void CollocationNlp::build() {
 /// energy weights and the smoothness form.
 void CollocationNlp::build_layout() {
   const bool trap = tr_ == Transcription::Trapezoidal;
-  const bool compressed = tr_ == Transcription::HermiteSimpsonCompressed;
   const int N = intervals();
   nu_ = dyn_.nu();
   nz_ = nx + nu_;
