@@ -47,6 +47,8 @@ ModalIntegrals modal_integrals(const Beam& beam, const AdmissibleBasis& basis) {
   mi.K.setZero(n, n);
   mi.Phi_bar.setZero(n);
   mi.Phi_tilde.setZero(n);
+  mi.H_bar.setZero(n, n);  // filled only when a model asks for geometric stiffening
+  mi.G_c.setZero(n, n);
 
   // Elastic integrals by quadrature; the rigid ones (m, S_o, I_o) in closed form below.
   auto add_mass = [&](double x, double dm, const Eigen::RowVectorXd& phi) {

@@ -20,6 +20,12 @@ struct ModalIntegrals {
   Eigen::MatrixXd K;            ///< n x n stiffness [N/m]
   Eigen::RowVectorXd Phi_bar;   ///< 1 x n [kg]
   Eigen::RowVectorXd Phi_tilde; ///< 1 x n [kg m]
+  /// Geometric stiffening (foreshortening of the bent beam, docs/theory.md): with
+  /// H(x) = ∫ between o and x of Phi'^T Phi', H_bar = ∫ sgn(x) H(x) dm (axial force per unit
+  /// body-axis acceleration of o) and G_c = ∫ |x| H(x) dm (centrifugal tension per unit
+  /// theta'^2). n x n; zero when the model leaves stiffening out.
+  Eigen::MatrixXd H_bar;        ///< [kg]
+  Eigen::MatrixXd G_c;          ///< [kg m]
   int size() const { return static_cast<int>(M.rows()); }
 };
 
