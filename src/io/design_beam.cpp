@@ -65,13 +65,20 @@ void read_beam(Section& root, Design& d) {
                   shortest(lim::kMinMass_kg) + ", " + shortest(lim::kMaxMass_kg) + "] kg (the supported range)");
   const bool have_length = !p.segments.empty();
   const Range on_beam = have_length ? Range::closed(0.0, length) : Range::nonnegative();
-  // o strictly inside, and not within L/1000 of an end: the full model's step count grows
-  // like 1/distance^2 there, and at 1e-6 L its modes at rest can no longer be computed
-  const Range inside =
-      have_length ? Range{0.0, length, true, true}.supported(lim::kEndMargin * length, (1.0 - lim::kEndMargin) * length)
-                  : Range::positive();
-
-  if (b.has("reference_m")) p.reference_m = b.number("reference_m", inside, false);
+  // o at an end (a cantilever clamped at o: one side's functions only), or inside and not
+  // within L/1000 of an end: the full model's step count grows like 1/distance^2 there,
+  // and at 1e-6 L its modes at rest can no longer be computed
+  if (b.has("reference_m")) {
+    p.reference_m = b.number("reference_m", have_length ? Range::closed(0.0, length) : Range::nonnegative(), false);
+    const double margin = lim::kEndMargin * length;
+    if (have_length && p.reference_m && *p.reference_m != 0.0 && *p.reference_m != length &&
+        (*p.reference_m < margin || *p.reference_m > length - margin)) {
+      b.problem("reference_m", b.key_path("reference_m") + " = " + shortest(*p.reference_m) + ", must be 0 or " +
+                                   shortest(length) + " (o at an end: a cantilever clamped at o) or within [" +
+                                   shortest(margin) + ", " + shortest(length - margin) + "] (the supported range)");
+      p.reference_m.reset();
+    }
+  }
   Section hub = b.table("hub");
   if (hub.present()) {
     p.hub_mass_kg = hub.number("mass_kg", kMassOrZero, false).value_or(0.0);

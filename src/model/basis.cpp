@@ -52,12 +52,15 @@ AdmissibleBasis::AdmissibleBasis(int n, double a_left, double a_right)
     os << "admissible basis: noa = " << n << ", must be in [1, " << kMaxNoa << "]";
     throw std::invalid_argument(os.str());
   }
-  if (!(a_left > 0.0) || !(a_right > 0.0) || !std::isfinite(a_left) || !std::isfinite(a_right))
-    throw std::invalid_argument("admissible basis: both half-lengths must be finite and > 0");
-  for (int k = 1; k <= (n + 1) / 2; ++k) modes_.emplace_back(k);
+  if (!(a_left >= 0.0) || !(a_right >= 0.0) || !std::isfinite(a_left) || !std::isfinite(a_right) ||
+      !(a_left + a_right > 0.0))
+    throw std::invalid_argument("admissible basis: half-lengths must be finite and >= 0, and not both zero");
+  const int cantilevers = one_sided() ? n : (n + 1) / 2;
+  for (int k = 1; k <= cantilevers; ++k) modes_.emplace_back(k);
 }
 
 double AdmissibleBasis::max_wavenumber() const {
+  if (one_sided()) return modes_.back().lambda / std::max(a_left_, a_right_);
   return modes_.back().lambda / std::min(a_left_, a_right_);
 }
 
@@ -67,6 +70,25 @@ BasisValues AdmissibleBasis::evaluate(double x) const {
   const double a = right ? a_right_ : a_left_;
   const double sgn = right ? 1.0 : -1.0;
   const double xi = std::abs(x);
+  if (one_sided()) {
+    // o at an end: function j is the (j+1)-th cantilever mode of the one half there is;
+    // the other side has no beam (zero there, as at o).
+    if (a == 0.0) {
+      v.phi.setZero();
+      v.dphi.setZero();
+      v.ddphi.setZero();
+      return v;
+    }
+    for (int j = 0; j < n_; ++j) {
+      const CantileverConstants& mode = modes_[j];
+      const double beta = mode.lambda / a;
+      const CantileverMode p = mode.at(beta * xi);
+      v.phi(j) = p.value;
+      v.dphi(j) = sgn * beta * p.d1;
+      v.ddphi(j) = beta * beta * p.d2;
+    }
+    return v;
+  }
   for (int j = 0; j < n_; ++j) {
     const CantileverConstants& mode = modes_[j / 2];
     const double beta = mode.lambda / a;

@@ -70,9 +70,10 @@ Beam::Beam(BeamProperties props) : props_(std::move(props)) {
     }
     s_o_ = ms / m;
   }
-  if (!std::isfinite(s_o_) || !(s_o_ > 0.0) || !(s_o_ < length_)) {
+  // o at an end is a cantilever clamped at o (the basis then has one side only)
+  if (!std::isfinite(s_o_) || !(s_o_ >= 0.0) || !(s_o_ <= length_)) {
     std::ostringstream os;
-    os << "beam reference_m = " << s_o_ << ", must lie strictly inside the beam (0, " << length_ << ")";
+    os << "beam reference_m = " << s_o_ << ", must lie on the beam [0, " << length_ << "]";
     throw std::invalid_argument(os.str());
   }
 }

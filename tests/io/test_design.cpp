@@ -51,8 +51,11 @@ TEST_CASE("bad values name key, line, value and allowed range", "[io]") {
   CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n[[beam.point_mass]]\n"
                          "position_m = 1.5\nmass_kg = 0.1\n"),
              Contains("line 6: beam.point_mass[1].position_m = 1.5, must be in [0, 1]"));
-  CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\nreference_m = 1.0\n"),
-             Contains("line 5: beam.reference_m = 1.0, must be in (0, 1)"));
+  CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\nreference_m = 1.5\n"),
+             Contains("line 5: beam.reference_m = 1.5, must be in [0, 1]"));
+  // o at either end: a cantilever clamped at o
+  CHECK(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\nreference_m = 1.0\n").empty());
+  CHECK(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\nreference_m = 0.0\n").empty());
 }
 
 TEST_CASE("every problem is reported at once", "[io]") {

@@ -219,7 +219,8 @@ TEST_CASE("absurd magnitudes are outside the supported range", "[io]") {
   CHECK_THAT(problems_of(beam("1.0", "1.0", "1e13")), Contains("line 4: beam.bending_stiffness_Nm2 = 1e+13"));
   // o within L/1000 of an end
   CHECK_THAT(problems_of(beam("1.0", "1.0", "1.0") + "reference_m = 1e-12\n"),
-             Contains("line 5: beam.reference_m = 1e-12, must be within [0.001, 0.999] (the supported range)"));
+             Contains("line 5: beam.reference_m = 1e-12, must be 0 or 1 (o at an end: a cantilever clamped at o) or "
+                      "within [0.001, 0.999] (the supported range)"));
   CHECK(problems_of(beam("1.0", "1.0", "1.0") + "reference_m = 0.001\n").empty());
   CHECK_THAT(problems_of(kPaperBeam + replaced(kLoad, "[0.0, 1.0]", "[0.0, 1e300]")),
              Contains("line 9: load[1].direction contains 1e+300, each entry must be within [-1e+06, 1e+06]"));

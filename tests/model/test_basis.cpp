@@ -84,7 +84,35 @@ TEST_CASE("basis symmetry and derivatives match central differences", "[model]")
 TEST_CASE("basis rejects bad sizes", "[model]") {
   CHECK_THROWS_WITH(AdmissibleBasis(0, 0.5, 0.5), Catch::Contains("noa = 0, must be in [1, 100]"));
   CHECK_THROWS_WITH(AdmissibleBasis(kMaxNoa + 1, 0.5, 0.5), Catch::Contains("must be in [1, 100]"));
-  CHECK_THROWS_AS(AdmissibleBasis(4, 0.0, 0.5), std::invalid_argument);
+  CHECK_THROWS_AS(AdmissibleBasis(4, 0.0, 0.0), std::invalid_argument);
+  CHECK_THROWS_AS(AdmissibleBasis(4, -0.1, 0.5), std::invalid_argument);
+}
+
+TEST_CASE("o at an end: the other side's cantilever modes in order", "[model]") {
+  // a_left = 0: function k is the k-th cantilever mode on [0, a_right]; nothing left of o
+  const double a = 0.8;
+  const AdmissibleBasis right(7, 0.0, a), left(7, a, 0.0);
+  REQUIRE(right.one_sided());
+  CHECK(right.max_wavenumber() == Approx(cantilever_root(7) / a).epsilon(1e-15));  // one division
+  for (double xi : {0.13, 0.4, 0.8}) {
+    const BasisValues r = right.evaluate(xi), l = left.evaluate(-xi);
+    for (int k = 1; k <= 7; ++k) {
+      const CantileverConstants c(k);
+      const double beta = c.lambda / a;
+      const CantileverMode m = c.at(beta * xi);
+      // the same formula evaluated once more: bit-equal values, slopes mirrored
+      CHECK(r.phi(k - 1) == m.value);
+      CHECK(r.dphi(k - 1) == beta * m.d1);
+      CHECK(l.phi(k - 1) == m.value);
+      CHECK(l.dphi(k - 1) == -(beta * m.d1));
+    }
+  }
+  // at o: clamped (round-off of O(1) values, measured 2e-16; slopes O(beta) with beta <= 25)
+  CHECK(right.evaluate(0.0).phi.cwiseAbs().maxCoeff() < 1e-13);
+  CHECK(right.evaluate(0.0).dphi.cwiseAbs().maxCoeff() < 1e-12);
+  // the side without beam: zero
+  CHECK(right.evaluate(-0.1).phi.cwiseAbs().maxCoeff() == 0.0);
+  CHECK(left.evaluate(0.1).dphi.cwiseAbs().maxCoeff() == 0.0);
 }
 
 TEST_CASE("Gauss-Legendre integrates polynomials of degree 2n-1 exactly", "[model]") {

@@ -4,7 +4,9 @@
 // cantilever mode on [0, a] (tip value +-2, integral of psi_k^2 equal to a),
 //   phi_{2k-1}(x) = psi_k(|x|)            (symmetric about o)
 //   phi_{2k}(x)   = sign(x) psi_k(|x|)    (antisymmetric about o)
-// so phi(0) = phi'(0) = 0 and rigid motion lives in (R, theta) alone.
+// so phi(0) = phi'(0) = 0 and rigid motion lives in (R, theta) alone. With o at an end of
+// the beam (one half of zero length: a cantilever clamped at o), the functions are the
+// other half's cantilever modes in order, phi_k(x) = psi_k(|x|), k = 1..n.
 #include <vector>
 
 #include <Eigen/Dense>
@@ -43,13 +45,16 @@ struct BasisValues {
 
 class AdmissibleBasis {
  public:
-  /// n functions on [-a_left, a_right]. Throws std::invalid_argument if n is outside
-  /// [1, kMaxNoa] or a half-length is not positive.
+  /// n functions on [-a_left, a_right]. One half-length may be zero (o at that end: the
+  /// other half's cantilever modes only). Throws std::invalid_argument if n is outside
+  /// [1, kMaxNoa], a half-length is negative or not finite, or both are zero.
   AdmissibleBasis(int n, double a_left, double a_right);
 
   int size() const { return n_; }
   double a_left() const { return a_left_; }
   double a_right() const { return a_right_; }
+  /// True when o is at an end (one half of zero length).
+  bool one_sided() const { return a_left_ == 0.0 || a_right_ == 0.0; }
   /// Largest wavenumber lambda_k / a over both halves (sets quadrature density).
   double max_wavenumber() const;
 
@@ -61,7 +66,7 @@ class AdmissibleBasis {
  private:
   int n_;
   double a_left_, a_right_;
-  std::vector<CantileverConstants> modes_;  // one per cantilever index k = 1..ceil(n/2)
+  std::vector<CantileverConstants> modes_;  // one per cantilever index k = 1..ceil(n/2) (1..n one-sided)
 };
 
 }  // namespace freeflex

@@ -38,7 +38,8 @@ struct BeamProperties {
 
 /// Validated, immutable beam. Construction throws std::invalid_argument naming the
 /// offending field when a length, mass or stiffness is not finite and positive, or a
-/// position lies outside the beam, or o is not strictly inside it.
+/// position lies outside the beam, or o is not on it (o at an end: a cantilever clamped
+/// at o).
 class Beam {
  public:
   explicit Beam(BeamProperties props);
