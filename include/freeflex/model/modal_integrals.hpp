@@ -37,6 +37,26 @@ AdmissibleBasis make_basis(const Beam& beam, int noa);
 /// panels no wider than 2.5 / (largest wavenumber).
 GaussRule beam_quadrature(const Beam& beam, const AdmissibleBasis& basis);
 
+/// H_bar and G_c are left zero: see stiffening_integrals.
 ModalIntegrals modal_integrals(const Beam& beam, const AdmissibleBasis& basis);
+
+/// Geometric stiffening (docs/theory.md section 13), from the basis's evaluate() and
+/// composite Gauss quadrature only:
+///   H(x) = ∫ Phi'^T Phi' between o and x                                   (eq. 13.1)
+///   H_bar = ∫ sgn(x) H(x) dm = ∫ sgn(ξ) μ(ξ) Phi'^T Phi'(ξ) dξ              (eq. 13.3)
+///   G_c   = ∫ |x| H(x) dm    = ∫ σ(ξ) Phi'^T Phi'(ξ) dξ                     (eq. 13.3)
+/// with μ(ξ) the mass beyond ξ (away from o) and σ(ξ) = ∫ over that mass of |x| dm; the
+/// distributed mass enters through μ and σ (piecewise polynomials), point masses through
+/// H at their positions.
+struct StiffeningIntegrals {
+  Eigen::MatrixXd H_bar;  ///< n x n [kg]
+  Eigen::MatrixXd G_c;    ///< n x n [kg m]
+};
+StiffeningIntegrals stiffening_integrals(const Beam& beam, const AdmissibleBasis& basis);
+/// The modal integrals with H_bar and G_c filled.
+ModalIntegrals stiffened_modal_integrals(const Beam& beam, const AdmissibleBasis& basis);
+/// H(x) of eq. 13.1 (n x n, symmetric positive semidefinite) at body coordinate x: the
+/// foreshortening of the point at x is h(x) = 1/2 q^T H(x) q.
+Eigen::MatrixXd foreshortening_matrix(const Beam& beam, const AdmissibleBasis& basis, double x);
 
 }  // namespace freeflex
