@@ -52,6 +52,7 @@ FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory
   // symmetric positive definite and well conditioned (the basis is orthogonal in M): its
   // inverse, formed once, makes every solve one matrix-vector product
   rest_inverse_ = M0.llt().solve(Eigen::MatrixXd::Identity(body_.dofs(), body_.dofs()));
+  mq_inverse_ = body_.integrals().M.llt().solve(Eigen::MatrixXd::Identity(body_.n(), body_.n()));
 }
 
 FirstOrderModel::Data FirstOrderModel::create_data() const { return Data{}; }
@@ -81,7 +82,9 @@ FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) cons
   Kr.block(0, 3, 2, n) = (thdd * fr.CJe2 - thd * thd * fr.Ce2) * mi.Phi_bar;
   Kr.block(2, 3, 1, n) = Rdd.dot(fr.CJe2) * mi.Phi_bar;
   Kr.bottomRightCorner(n, n) = mi.K - thd * thd * mi.M;
-  Kr.middleCols(2, 1 + n) -= dG;  // configuration-dependent loads
+  if (body_.geometric_stiffening())  // eq. 13.9: the tension the nominal motion sets up
+    Kr.bottomRightCorner(n, n) += thd * thd * mi.G_c - fr.Ce1.dot(Rdd) * mi.H_bar;
+  Kr.middleCols(2, 1 + n) -= dG;  // configuration-dependent loads (eq. 13.7 included)
 
   // ∂(residual)/∂z'
   Eigen::MatrixXd Cr = Eigen::MatrixXd::Zero(N, N);
@@ -129,6 +132,38 @@ const Eigen::VectorXd& FirstOrderModel::rhs(Data& w, const Instant& at, const Ei
                                             const Eigen::Ref<const Eigen::VectorXd>& u1) const {
   // After the first call with a workspace the right-hand side allocates nothing (it runs
   // ~10⁴ times per simulated second).
+  const int N = body_.dofs();
+  const Eigen::Matrix2d& C = forces(w, at, x1, u1);
+  Eigen::VectorXd& f = w.f;
+  // 𝕄0(θ0)⁻¹ f = T 𝕄0(0)⁻¹ Tᵀ f
+  f.head<2>() = C.transpose() * f.head<2>();
+  Eigen::VectorXd& x1_dot = w.x1_dot;
+  x1_dot.resize(2 * N);
+  x1_dot.head(N) = x1.tail(N);
+  auto z1dd = x1_dot.tail(N);
+  z1dd.noalias() = rest_inverse_.lazyProduct(f);  // coefficient-wise: cheaper at these sizes
+  const Eigen::Vector2d a = z1dd.head<2>();
+  z1dd.head<2>() = C * a;
+  return x1_dot;
+}
+
+const Eigen::VectorXd& FirstOrderModel::prescribed_rhs(Data& w, const Instant& at,
+                                                       const Eigen::Ref<const Eigen::VectorXd>& xq,
+                                                       const Eigen::Ref<const Eigen::VectorXd>& u1) const {
+  // eq. 13.10: the q rows of eq. 7.1 with R1 = θ1 = 0, M q'' = f_q
+  const int n = body_.n(), N = body_.dofs();
+  w.x1.setZero(2 * N);
+  w.x1.segment(3, n) = xq.head(n);
+  w.x1.tail(n) = xq.tail(n);
+  forces(w, at, w.x1, u1);
+  w.xq_dot.resize(2 * n);
+  w.xq_dot.head(n) = xq.tail(n);
+  w.xq_dot.tail(n).noalias() = mq_inverse_ * w.f.tail(n);
+  return w.xq_dot;
+}
+
+const Eigen::Matrix2d& FirstOrderModel::forces(Data& w, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
+                                               const Eigen::Ref<const Eigen::VectorXd>& u1) const {
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n(), N = body_.dofs();
   const Frame fr = frame_at(nominal_, at, mi.S_o);
@@ -163,17 +198,13 @@ const Eigen::VectorXd& FirstOrderModel::rhs(Data& w, const Instant& at, const Ei
         mi.Phi_bar.transpose() * (Ce1.dot(Rdd) * th1);
   fq.noalias() -= mi.K * w.q;
   fq.noalias() += (thd * thd) * mi.M * w.q;
+  if (body_.geometric_stiffening()) {  // eq. 13.9
+    fq.noalias() -= (thd * thd) * mi.G_c * w.q;
+    fq.noalias() += Ce1.dot(Rdd) * mi.H_bar * w.q;
+  }
   if (body_.damped()) f.noalias() -= body_.damping() * x1.tail(N);
-  // 𝕄0(θ0)⁻¹ f = T 𝕄0(0)⁻¹ Tᵀ f
-  f.head<2>() = C.transpose() * f.head<2>();
-  Eigen::VectorXd& x1_dot = w.x1_dot;
-  x1_dot.resize(2 * N);
-  x1_dot.head(N) = x1.tail(N);
-  auto z1dd = x1_dot.tail(N);
-  z1dd.noalias() = rest_inverse_.lazyProduct(f);  // coefficient-wise: cheaper at these sizes
-  const Eigen::Vector2d a = z1dd.head<2>();
-  z1dd.head<2>() = C * a;
-  return x1_dot;
+  w.C = C;
+  return w.C;
 }
 
 }  // namespace freeflex

@@ -32,8 +32,12 @@ void applied_force(const ForceElement& el, double psi, Eigen::Vector2d& f, Eigen
 }  // namespace
 
 FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> elements,
-                           std::vector<double> damping_ratios)
-    : beam_(beam), basis_(make_basis(beam, noa)), mi_(modal_integrals(beam_, basis_)), elements_(std::move(elements)) {
+                           std::vector<double> damping_ratios, bool geometric_stiffening)
+    : beam_(beam),
+      basis_(make_basis(beam, noa)),
+      mi_(geometric_stiffening ? stiffened_modal_integrals(beam_, basis_) : modal_integrals(beam_, basis_)),
+      elements_(std::move(elements)),
+      stiffening_(geometric_stiffening) {
   for (const auto& e : elements_) {
     if (!std::isfinite(e.position_m) || e.position_m < 0.0 || e.position_m > beam_.length()) {
       std::ostringstream os;
@@ -46,6 +50,7 @@ FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> 
     x_.push_back(x);
     phi_.push_back(v.phi);
     dphi_.push_back(v.dphi);
+    H_.push_back(stiffening_ ? foreshortening_matrix(beam_, basis_, x) : Eigen::MatrixXd());
   }
   const int n = basis_.size(), N = 3 + n;
   // Schur complement of the rigid block of the rest mass matrix (eq. 6.8).
@@ -78,6 +83,25 @@ int FlexibleBody::element_index(const std::string& name) const {
 Eigen::MatrixXd FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const {
   const int n = this->n();
   const Eigen::Matrix2d C = rot(theta);
+  if (stiffening_) {
+    // eq. 13.5: s(q) = [S_o − ½ qᵀH̄q, Φ̄q], B(q) = [−(H̄q)ᵀ; Φ̄], I(q) = I_o + qᵀ(M − G_c)q
+    const Eigen::VectorXd Hq = mi_.H_bar * q;
+    const Eigen::Vector2d s(mi_.S_o - 0.5 * q.dot(Hq), mi_.Phi_bar.dot(q));
+    Eigen::MatrixXd B(2, n);
+    B.row(0) = -Hq.transpose();
+    B.row(1) = mi_.Phi_bar;
+    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(dofs(), dofs());
+    out(0, 0) = out(1, 1) = mi_.m;
+    out.block<2, 1>(0, 2) = C * kJ * s;
+    out.block<1, 2>(2, 0) = (C * kJ * s).transpose();
+    out.block(0, 3, 2, n) = C * B;
+    out.block(3, 0, n, 2) = (C * B).transpose();
+    out(2, 2) = mi_.I_o + q.dot((mi_.M - mi_.G_c) * q);
+    out.block(2, 3, 1, n) = mi_.Phi_tilde;
+    out.block(3, 2, n, 1) = mi_.Phi_tilde.transpose();
+    out.bottomRightCorner(n, n) = mi_.M;
+    return out;
+  }
   const Eigen::Vector2d s(mi_.S_o, mi_.Phi_bar.dot(q));  // s(q) = ∫p dm, eq. 3.3
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(dofs(), dofs());
   out(0, 0) = out(1, 1) = mi_.m;
@@ -126,6 +150,16 @@ void element_force_into(const FlexibleBody& body, int e, double theta, const Eig
   g.head<2>() = f;
   g(2) = -w(0) * ua + w(1) * xa;
   g.tail(n) = phi.transpose() * w(1);
+  // eq. 13.7: the point has moved towards o by h_a = ½ qᵀH_a q, and δp_x = −sgn(x_a)(H_a q)ᵀδq
+  Eigen::VectorXd Haq;
+  double sa = 0.0, ha = 0.0;
+  if (body.geometric_stiffening() && xa != 0.0) {
+    sa = xa > 0.0 ? 1.0 : -1.0;
+    Haq = body.element_foreshortening(e) * q;
+    ha = 0.5 * q.dot(Haq);
+    g(2) -= w(1) * sa * ha;
+    g.tail(n) -= (sa * w(0)) * Haq;
+  }
   if (!d) return;
   const Eigen::Vector2d dw_dth = kJ.transpose() * w + C.transpose() * df_dth;
   const Eigen::MatrixXd dw_dq = C.transpose() * df_dq;
@@ -135,6 +169,13 @@ void element_force_into(const FlexibleBody& body, int e, double theta, const Eig
   d->block(2, 1, 1, n) = -ua * dw_dq.row(0) - w(0) * phi + xa * dw_dq.row(1);
   d->block(3, 0, n, 1) = phi.transpose() * dw_dth(1);
   d->block(3, 1, n, n) = phi.transpose() * dw_dq.row(1);
+  if (sa != 0.0) {
+    const Eigen::MatrixXd& Ha = body.element_foreshortening(e);
+    (*d)(2, 0) -= dw_dth(1) * sa * ha;
+    d->block(2, 1, 1, n) -= sa * (ha * dw_dq.row(1) + w(1) * Haq.transpose());
+    d->block(3, 0, n, 1) -= (sa * dw_dth(0)) * Haq;
+    d->block(3, 1, n, n) -= sa * (Haq * dw_dq.row(0) + w(0) * Ha);
+  }
 }
 
 }  // namespace
@@ -207,12 +248,28 @@ void detail::add_element_force(const FlexibleBody& body, int e, double theta, co
   G.head<2>() += scale * f;
   G(2) += scale * (-w(0) * ua + w(1) * xa);
   G.tail(n).noalias() += (scale * w(1)) * phi.transpose();
+  const bool shortens = body.geometric_stiffening() && xa != 0.0;  // eq. 13.7
+  const double sa = xa > 0.0 ? 1.0 : -1.0;
+  if (shortens) {
+    const Eigen::MatrixXd& Ha = body.element_foreshortening(e);
+    const double ha = 0.5 * q.dot(Ha * q);
+    G(2) -= scale * w(1) * sa * ha;
+    G.tail(n).noalias() -= (scale * sa * w(0)) * (Ha * q);
+  }
   if (!dG) return;
   const Eigen::Vector2d dw = d_theta * (kJ.transpose() * w) + C.transpose() * df;
   const double dua = d_q ? phi.dot(*d_q) : 0.0;
   dG->head<2>() += scale * df;
   (*dG)(2) += scale * (-dw(0) * ua - w(0) * dua + dw(1) * xa);
   dG->tail(n).noalias() += (scale * dw(1)) * phi.transpose();
+  if (shortens) {
+    const Eigen::MatrixXd& Ha = body.element_foreshortening(e);
+    const Eigen::VectorXd Haq = Ha * q;
+    const double ha = 0.5 * q.dot(Haq), dha = d_q ? Haq.dot(*d_q) : 0.0;
+    (*dG)(2) -= scale * sa * (dw(1) * ha + w(1) * dha);
+    dG->tail(n).noalias() -= (scale * sa * dw(0)) * Haq;
+    if (d_q) dG->tail(n).noalias() -= (scale * sa * w(0)) * (Ha * *d_q);
+  }
 }
 
 double FlexibleBody::vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& q,

@@ -30,6 +30,12 @@ FullModel::Data FullModel::create_data() const {
   d.Mq.resize(body_.n());
   d.Kq.resize(body_.n());
   d.Dzd.resize(N);
+  if (body_.geometric_stiffening()) {
+    d.Hq.resize(body_.n());
+    d.Hqd.resize(body_.n());
+    d.Gq.resize(body_.n());
+    d.Wv.resize(N);
+  }
   return d;
 }
 
@@ -41,6 +47,19 @@ void FullModel::bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Re
   const auto q = z.tail(n);
   const auto qd = zd.tail(n);
   const Eigen::Matrix2d C = rot(th);
+  if (body_.geometric_stiffening()) {
+    // eq. 13.6: R row −θ'² C s + 2θ' C J B q' − C e1 (q'ᵀH̄q'); θ row 2θ' qᵀ(M − G_c)q';
+    // q row −θ'² (M − G_c) q + K q, with s(q), B(q) of eq. 13.5
+    const Eigen::VectorXd Hq = mi.H_bar * q;
+    const Eigen::Vector2d s(mi.S_o - 0.5 * q.dot(Hq), mi.Phi_bar.dot(q));
+    const Eigen::Vector2d Bqd(-Hq.dot(qd), mi.Phi_bar.dot(qd));
+    Mq.noalias() = mi.M * q - mi.G_c * q;
+    out.head<2>() = -thd * thd * (C * s) + 2.0 * thd * (C * kJ * Bqd) - qd.dot(mi.H_bar * qd) * C.col(0);
+    out(2) = 2.0 * thd * Mq.dot(qd);
+    out.tail(n) = -thd * thd * Mq + mi.K * q;
+    if (body_.damped()) out.noalias() += body_.damping() * zd;
+    return;
+  }
   const Eigen::Vector2d s(mi.S_o, mi.Phi_bar.dot(q));
   const double Pqd = mi.Phi_bar.dot(qd);
   Mq.noalias() = mi.M * q;
@@ -65,6 +84,7 @@ Eigen::VectorXd FullModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
 
 bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                     const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  if (body_.geometric_stiffening()) return rhs_stiffened(d, x, commands);
   // The same equations as residual(), written as plain loops over raw arrays: this runs
   // tens of thousands of times per simulation on vectors of 9 to 30 entries, where the
   // setup of Eigen's dynamic-size kernels costs more than the arithmetic.
@@ -141,6 +161,77 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   return true;
 }
 
+bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                              const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  // eq. 13.6 in body axes, solved by the kept inverse of 𝕄_b(0) and a 4 x 4 Woodbury core.
+  const ModalIntegrals& mi = body_.integrals();
+  const int N = body_.dofs(), n = body_.n();
+  const auto q = x.segment(3, n);
+  const auto qd = x.segment(N + 3, n);
+  const double th = x(2), thd = x(N + 2), thd2 = thd * thd;
+  const double c = std::cos(th), s = std::sin(th);
+  detail::generalized_force(body_, th, q, commands, d.G);  // R rows in inertial axes
+  d.Hq.noalias() = mi.H_bar * q;
+  d.Hqd.noalias() = mi.H_bar * qd;
+  d.Mq.noalias() = mi.M * q;
+  d.Gq.noalias() = mi.G_c * q;
+  d.Mq -= d.Gq;  // (M − G_c) q
+  d.Kq.noalias() = mi.K * q;
+  const double Pq = mi.Phi_bar.dot(q), Pqd = mi.Phi_bar.dot(qd);
+  const double qHq = q.dot(d.Hq), qdHq = qd.dot(d.Hq), qdHqd = qd.dot(d.Hqd);
+  const double sx = mi.S_o - 0.5 * qHq, sy = Pq;
+  const double qMq = q.dot(d.Mq), qMqd = qd.dot(d.Mq);
+  // g = Tᵀ (G − h − K q − D z') with Cᵀ h_R = −θ'² s + 2θ' J B q' − e1 q'ᵀH̄q',
+  // J B q' = [−Φ̄q', −qᵀH̄q']; h_θ = 2θ' qᵀ(M − G_c)q'; h_q = −θ'² (M − G_c) q
+  Eigen::VectorXd& g = d.b;
+  const double* G = d.G.data();
+  g(0) = c * G[0] + s * G[1] + thd2 * sx + 2.0 * thd * Pqd + qdHqd;
+  g(1) = -s * G[0] + c * G[1] + thd2 * sy + 2.0 * thd * qdHq;
+  g(2) = G[2] - 2.0 * thd * qMqd;
+  g.tail(n) = d.G.tail(n) + thd2 * d.Mq - d.Kq;
+  if (body_.damped()) {
+    d.Dzd.noalias() = body_.damping() * x.tail(N);
+    g(0) -= c * d.Dzd(0) + s * d.Dzd(1);
+    g(1) -= -s * d.Dzd(0) + c * d.Dzd(1);
+    g.tail(N - 2) -= d.Dzd.tail(N - 2);
+  }
+  // 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ with U = [e_x, e_y, e_θ, v], v = [0; 0; 0; H̄q] and
+  // S(x,θ) = −Φ̄q, S(y,θ) = −½ qᵀH̄q, S(θ,θ) = qᵀ(M − G_c)q, S(x,v) = −1 (eq. 13.5):
+  // w = y − W U S (I + Uᵀ W U S)⁻¹ Uᵀ y, y = W g, W = 𝕄_b(0)⁻¹.
+  const Eigen::MatrixXd& W = rest_inverse_;
+  Eigen::VectorXd& x_dot = d.x_dot;
+  auto w = x_dot.tail(N);
+  w.noalias() = W * g;
+  d.Wv.noalias() = W.rightCols(n) * d.Hq;
+  Eigen::Matrix<double, Eigen::Dynamic, 4> WU(N, 4);
+  WU.col(0) = W.col(0);
+  WU.col(1) = W.col(1);
+  WU.col(2) = W.col(2);
+  WU.col(3) = d.Wv;
+  Eigen::Matrix4d UWU;
+  UWU.topLeftCorner<3, 3>() = W.topLeftCorner<3, 3>();
+  UWU.block<3, 1>(0, 3) = d.Wv.head<3>();
+  UWU.block<1, 3>(3, 0) = d.Wv.head<3>().transpose();
+  UWU(3, 3) = d.Hq.dot(d.Wv.tail(n));
+  Eigen::Matrix4d S = Eigen::Matrix4d::Zero();
+  S(0, 2) = S(2, 0) = -Pq;
+  S(1, 2) = S(2, 1) = -0.5 * qHq;
+  S(2, 2) = qMq;
+  S(0, 3) = S(3, 0) = -1.0;
+  const Eigen::Matrix4d core = Eigen::Matrix4d::Identity() + UWU * S;
+  // det 𝕄_b = det 𝕄_b(0) · det(core): a non-positive value means 𝕄 is not positive definite
+  const double det = core.determinant();
+  if (!(det > 0.0)) return false;
+  const Eigen::Vector4d Uy(w(0), w(1), w(2), d.Hq.dot(w.tail(n)));
+  const Eigen::Vector4d zc = S * core.partialPivLu().solve(Uy);
+  w.noalias() -= WU * zc;
+  const double wx = w(0), wy = w(1);
+  w(0) = c * wx - s * wy;
+  w(1) = s * wx + c * wy;
+  x_dot.head(N) = x.tail(N);
+  return true;
+}
+
 double FullModel::energy(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   const int N = body_.dofs(), n = body_.n();
   const Eigen::MatrixXd Mz = body_.mass_matrix(x(2), x.segment(3, n));
@@ -153,6 +244,15 @@ Eigen::Vector2d FullModel::linear_momentum(const Eigen::Ref<const Eigen::VectorX
   const ModalIntegrals& mi = body_.integrals();
   const int N = body_.dofs(), n = body_.n();
   const Eigen::Matrix2d C = rot(x(2));
+  if (body_.geometric_stiffening()) {
+    // ∂T/∂R' = m R' + C (θ' J s(q) + B(q) q'), eq. 13.8
+    const auto q = x.segment(3, n);
+    const auto qd = x.tail(n);
+    const Eigen::VectorXd Hq = mi.H_bar * q;
+    const Eigen::Vector2d s(mi.S_o - 0.5 * q.dot(Hq), mi.Phi_bar.dot(q));
+    const Eigen::Vector2d Bqd(-Hq.dot(qd), mi.Phi_bar.dot(qd));
+    return mi.m * x.segment<2>(N) + C * (x(N + 2) * (kJ * s) + Bqd);
+  }
   const Eigen::Vector2d s(mi.S_o, mi.Phi_bar.dot(x.segment(3, n)));
   const auto zd = x.tail(N);
   // ∂T/∂R' = m R' + C (θ' J s + e2 Φ̄ q')
@@ -171,6 +271,13 @@ double FullModel::angular_momentum(const Eigen::Ref<const Eigen::VectorXd>& x) c
   const double Pqd = mi.Phi_bar.dot(zd.tail(n));
   // H = ∫ (r × r') dm with r = R + C p (eq. 6.7); a × b = aᵀ Jᵀ b in the plane.
   auto cross = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a(0) * b(1) - a(1) * b(0); };
+  if (body_.geometric_stiffening()) {
+    // eq. 13.8: H = R × P + (C s) × R' + θ' I(q) + Φ̃ q', P the linear momentum
+    const Eigen::VectorXd Hq = mi.H_bar * q;
+    const Eigen::Vector2d ss(mi.S_o - 0.5 * q.dot(Hq), mi.Phi_bar.dot(q));
+    const double Iq = mi.I_o + q.dot((mi.M - mi.G_c) * q);
+    return cross(R, linear_momentum(x)) + cross(C * ss, Rd) + thd * Iq + mi.Phi_tilde.dot(zd.tail(n));
+  }
   return mi.m * cross(R, Rd) + thd * R.dot(C * s) + cross(R, C.col(1)) * Pqd + cross(C * s, Rd) +
          thd * (mi.I_o + q.dot(mi.M * q)) + mi.Phi_tilde.dot(zd.tail(n));
 }

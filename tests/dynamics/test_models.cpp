@@ -13,8 +13,9 @@ using namespace freeflex;
 namespace {
 
 /// The rich beam and its four elements (tests/support/bodies.hpp).
-FlexibleBody rich_body(int noa, std::vector<double> damping = {}) {
-  return FlexibleBody(Beam(freeflex_test::rich_beam()), noa, freeflex_test::rich_elements(), std::move(damping));
+FlexibleBody rich_body(int noa, std::vector<double> damping = {}, bool stiffening = false) {
+  return FlexibleBody(Beam(freeflex_test::rich_beam()), noa, freeflex_test::rich_elements(), std::move(damping),
+                      stiffening);
 }
 
 /// A fixed rigid state returned at every instant: the linearization point.
@@ -37,7 +38,10 @@ double max_rel(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 }  // namespace
 
 TEST_CASE("first-order A(t), B(t) match central differences of the full model", "[dynamics]") {
-  const FlexibleBody body = rich_body(6, {0.02, 0.01, 0.03});
+  const bool stiffening = GENERATE(false, true);  // the paper's model and eq. 13.6 / 13.9
+  INFO("geometric stiffening " << stiffening);
+  const FlexibleBody body = rich_body(6, {0.02, 0.01, 0.03}, stiffening);
+  REQUIRE(body.integrals().H_bar.cwiseAbs().maxCoeff() > (stiffening ? 0.01 : -1.0));
   REQUIRE(std::abs(body.integrals().S_o) > 0.05);
   const FullModel full(body);
   const int N = body.dofs(), ne = 4;
@@ -89,7 +93,9 @@ TEST_CASE("first-order A(t), B(t) match central differences of the full model", 
 }
 
 TEST_CASE("element forces: derivatives against central differences away from q = 0", "[dynamics]") {
-  const FlexibleBody body = rich_body(8);
+  const bool stiffening = GENERATE(false, true);
+  INFO("geometric stiffening " << stiffening);
+  const FlexibleBody body = rich_body(8, {}, stiffening);
   const int N = body.dofs(), n = body.n();
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
@@ -114,7 +120,8 @@ TEST_CASE("element forces: derivatives against central differences away from q =
 }
 
 TEST_CASE("zero-order model is the full model's rigid rows at q = 0", "[dynamics]") {
-  const FlexibleBody body = rich_body(4);
+  const bool stiffening = GENERATE(false, true);
+  const FlexibleBody body = rich_body(4, {}, stiffening);
   const FullModel full(body);
   const ZeroOrderModel zero(body);
   const int N = body.dofs();
@@ -132,7 +139,9 @@ TEST_CASE("zero-order model is the full model's rigid rows at q = 0", "[dynamics
 }
 
 TEST_CASE("full model: rhs solves the residual, damping leaves rigid motion alone", "[dynamics]") {
-  const FlexibleBody body = rich_body(6, {0.05, 0.05});
+  const bool stiffening = GENERATE(false, true);  // rank-two and rank-four Woodbury
+  INFO("geometric stiffening " << stiffening);
+  const FlexibleBody body = rich_body(6, {0.05, 0.05}, stiffening);
   const FullModel full(body);
   auto data = full.create_data();
   const int N = body.dofs();
@@ -153,8 +162,13 @@ TEST_CASE("full model: rhs solves the residual, damping leaves rigid motion alon
     x(2) *= 4.0;  // θ across the circle
     REQUIRE(full.rhs(data, x, u));
     const Eigen::VectorXd r = full.residual(x.head(N), x.tail(N), xd.tail(N), u);
-    const double sc = (body.integrals().K * x.segment(3, body.n())).cwiseAbs().maxCoeff();
-    INFO("trial " << trial << ": residual " << r.cwiseAbs().maxCoeff() << " against " << sc);
+    // the largest terms: stiffness forces and inertia forces (|𝕄| |z''|, large where the
+    // stiffened 𝕄 at these O(1) q is nearly singular)
+    const Eigen::MatrixXd Mz = body.mass_matrix(x(2), x.segment(3, body.n()));
+    const double sc = std::max((body.integrals().K * x.segment(3, body.n())).cwiseAbs().maxCoeff(),
+                               (Mz.cwiseAbs() * xd.tail(N).cwiseAbs()).maxCoeff());
+    INFO("trial " << trial << ": residual " << r.cwiseAbs().maxCoeff() << " against " << sc << ", cond(M) "
+                  << Mz.jacobiSvd().singularValues()(0) / Mz.jacobiSvd().singularValues()(N - 1));
     CHECK(r.cwiseAbs().maxCoeff() < 1e-13 * sc);  // same bound as above
   }
   Eigen::VectorXd rigid = Eigen::VectorXd::Zero(N);
@@ -163,7 +177,8 @@ TEST_CASE("full model: rhs solves the residual, damping leaves rigid motion alon
 }
 
 TEST_CASE("first-order rhs (term by term) equals A x1 + B u1 + g", "[dynamics]") {
-  const FlexibleBody body = rich_body(6, {0.02, 0.01});
+  const bool stiffening = GENERATE(false, true);
+  const FlexibleBody body = rich_body(6, {0.02, 0.01}, stiffening);
   const int N = body.dofs(), ne = 4;
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> U(-1.0, 1.0);

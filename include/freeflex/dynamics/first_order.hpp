@@ -39,7 +39,9 @@ class FirstOrderModel {
   struct Data {
     StateSpace state_space;  ///< from the last state_space()
     Eigen::VectorXd x1_dot;  ///< from the last rhs()
-    Eigen::VectorXd q, q0, u0, f, dG;  // scratch of rhs()
+    Eigen::VectorXd xq_dot;  ///< from the last prescribed_rhs()
+    Eigen::VectorXd q, q0, u0, f, dG, x1;  // scratch of rhs()
+    Eigen::Matrix2d C;
   };
 
   /// `inputs` are the element indices whose commands u1 perturb (the actuators); the
@@ -65,13 +67,22 @@ class FirstOrderModel {
   /// the kept inverse of 𝕄0(0). u1 has input_size() entries (or none: zero).
   const Eigen::VectorXd& rhs(Data& data, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
                              const Eigen::Ref<const Eigen::VectorXd>& u1) const;
+  /// Prescribed rigid motion (docs/theory.md eq. 13.10): the nominal trajectory is the
+  /// motion itself (R1 = θ1 = 0), and only the q rows of eq. 7.1 remain,
+  /// M q'' = f_q(q, q'). xq = [q, q'] (2n); returns [q', q''] in data.xq_dot.
+  const Eigen::VectorXd& prescribed_rhs(Data& data, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& xq,
+                                        const Eigen::Ref<const Eigen::VectorXd>& u1) const;
 
  private:
+  /// The right-hand side of eq. 7.1 before the mass solve, into data.f; returns C(θ0).
+  const Eigen::Matrix2d& forces(Data& data, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
+                                const Eigen::Ref<const Eigen::VectorXd>& u1) const;
   const FlexibleBody& body_;
   const RigidTrajectory& nominal_;
   CommandFunction commands_;
   std::vector<int> inputs_;
   Eigen::MatrixXd rest_inverse_;  // 𝕄0(0)⁻¹, the mass matrix at θ = 0
+  Eigen::MatrixXd mq_inverse_;    // M⁻¹ (prescribed motion)
 };
 
 }  // namespace freeflex

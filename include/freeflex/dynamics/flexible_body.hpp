@@ -16,22 +16,27 @@ namespace freeflex {
 class FlexibleBody {
  public:
   /// `damping_ratios[i]` damps elastic mode i+1 (modes beyond the list are undamped).
-  /// Throws std::invalid_argument for an element off the beam or a negative ratio.
+  /// `geometric_stiffening`: keep the foreshortening of the bent beam to second order in q
+  /// (docs/theory.md section 13: H_bar, G_c and each force element's H(x_a) are computed);
+  /// false is the paper's model (section 6). Throws std::invalid_argument for an element
+  /// off the beam or a negative ratio.
   FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> elements,
-               std::vector<double> damping_ratios = {});
+               std::vector<double> damping_ratios = {}, bool geometric_stiffening = false);
 
   int n() const { return basis_.size(); }       ///< elastic coordinates
   int dofs() const { return 3 + basis_.size(); } ///< z = [Rx, Ry, theta, q]
   const Beam& beam() const { return beam_; }
   const AdmissibleBasis& basis() const { return basis_; }
   const ModalIntegrals& integrals() const { return mi_; }
+  /// True when the model keeps geometric stiffening (section 13).
+  bool geometric_stiffening() const { return stiffening_; }
   const std::vector<ForceElement>& elements() const { return elements_; }
   /// Index of the element called `name`, or -1.
   int element_index(const std::string& name) const;
   /// Body coordinate x of element e.
   double element_x(int e) const { return x_[e]; }
 
-  /// 𝕄(theta, q), eq. 6.1, (3+n) x (3+n).
+  /// 𝕄(theta, q), eq. 6.1 (eq. 13.5 with geometric stiffening), (3+n) x (3+n).
   Eigen::MatrixXd mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
 
   /// A generalized force and its derivative with respect to (theta, q).
@@ -53,6 +58,8 @@ class FlexibleBody {
   /// Basis values Φ(x_e) and slopes Φ'(x_e) at element e (1 x n).
   const Eigen::RowVectorXd& element_phi(int e) const { return phi_[e]; }
   const Eigen::RowVectorXd& element_slope(int e) const { return dphi_[e]; }
+  /// H(x_e) of eq. 13.1 at element e (n x n; empty without geometric stiffening).
+  const Eigen::MatrixXd& element_foreshortening(int e) const { return H_[e]; }
 
   /// Modal damping D (eq. 6.5), (3+n) x (3+n); zero when no ratio is set.
   const Eigen::MatrixXd& damping() const { return D_; }
@@ -70,8 +77,10 @@ class FlexibleBody {
   std::vector<ForceElement> elements_;
   std::vector<double> x_;
   std::vector<Eigen::RowVectorXd> phi_, dphi_;  // basis and slope at each element
+  std::vector<Eigen::MatrixXd> H_;               // H(x_e) (geometric stiffening)
   Eigen::MatrixXd D_, M_condensed_;
   bool damped_ = false;
+  bool stiffening_ = false;
 };
 
 }  // namespace freeflex

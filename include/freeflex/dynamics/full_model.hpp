@@ -15,6 +15,7 @@ class FullModel {
   struct Data {
     Eigen::VectorXd x_dot;  ///< x' from the last rhs()
     Eigen::VectorXd G, b, Mq, Kq, Dzd;  // scratch
+    Eigen::VectorXd Hq, Hqd, Gq, Wv;    // scratch of the stiffened model
   };
 
   /// Factors the body-frame mass matrix at rest once (see rhs).
@@ -35,7 +36,8 @@ class FullModel {
   /// which differs from 𝕄_b(0) only in the (x, θ) entries (−Φ̄ q) and the (θ, θ) entry
   /// (+ qᵀ M q): a symmetric rank-two change. So z'' comes from the inverse of 𝕄_b(0),
   /// formed at construction, and a 2 x 2 Woodbury correction instead of a new
-  /// factorization at every call.
+  /// factorization at every call. With geometric stiffening (eq. 13.5-13.6) the change
+  /// also touches the (x, q) and (y, θ) entries: a rank-four update, 4 x 4 Woodbury.
   bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
            const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
@@ -51,6 +53,9 @@ class FullModel {
   /// `Mq` is scratch of size n (receives M q).
   void bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
             Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
+  /// rhs() of the stiffened model (eq. 13.6).
+  bool rhs_stiffened(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
+                     const Eigen::Ref<const Eigen::VectorXd>& commands) const;
   const FlexibleBody& body_;
   Eigen::MatrixXd rest_inverse_;  ///< 𝕄_b(0)⁻¹
 };
