@@ -19,6 +19,7 @@ FullModel::FullModel(const FlexibleBody& body) : body_(body) {
   // 𝕄_b(0) is symmetric positive definite and well conditioned (the basis is orthogonal in
   // M): its inverse, formed once, turns each solve into one matrix-vector product.
   rest_inverse_ = Mb0.llt().solve(Eigen::MatrixXd::Identity(N, N));
+  mq_inverse_ = body_.integrals().M.llt().solve(Eigen::MatrixXd::Identity(body_.n(), body_.n()));
 }
 
 FullModel::Data FullModel::create_data() const {
@@ -230,6 +231,45 @@ bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& 
   w(1) = s * wx + c * wy;
   x_dot.head(N) = x.tail(N);
   return true;
+}
+
+bool FullModel::prescribed_rhs(Data& d, const RigidState& rigid, const Eigen::Ref<const Eigen::VectorXd>& xq,
+                               const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  const ModalIntegrals& mi = body_.integrals();
+  const int n = body_.n(), N = body_.dofs();
+  const auto q = xq.head(n);
+  const auto qd = xq.tail(n);
+  const double th = rigid.pos(2), thd = rigid.vel(2), thdd = rigid.acc(2);
+  const Eigen::Matrix2d C = rot(th);
+  const Eigen::Vector2d a = C.transpose() * rigid.acc.head<2>();  // R'' in body axes
+  detail::generalized_force(body_, th, q, commands, d.G);
+  // eq. 13.10: f = Q − Φ̄ᵀ a_y + a_x H̄ q − Φ̃ᵀ θ'' + θ'² (M − G_c) q − K q − D_q z'
+  auto f = d.b.tail(n);
+  f = d.G.tail(n) - a(1) * mi.Phi_bar.transpose() - thdd * mi.Phi_tilde.transpose();
+  d.Mq.noalias() = mi.M * q;
+  if (body_.geometric_stiffening()) {
+    d.Mq.noalias() -= mi.G_c * q;
+    f.noalias() += a(0) * (mi.H_bar * q);
+  }
+  f += (thd * thd) * d.Mq;
+  f.noalias() -= mi.K * q;
+  if (body_.damped()) {
+    d.zd_full.resize(N);
+    d.zd_full.head<3>() = rigid.vel;
+    d.zd_full.tail(n) = qd;
+    f.noalias() -= body_.damping().bottomRows(n) * d.zd_full;
+  }
+  d.xq_dot.resize(2 * n);
+  d.xq_dot.head(n) = qd;
+  d.xq_dot.tail(n).noalias() = mq_inverse_ * f;
+  return true;
+}
+
+Eigen::Vector3d FullModel::constraint_force(const Eigen::Ref<const Eigen::VectorXd>& z,
+                                            const Eigen::Ref<const Eigen::VectorXd>& zd,
+                                            const Eigen::Ref<const Eigen::VectorXd>& zdd,
+                                            const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  return residual(z, zd, zdd, commands).head<3>();
 }
 
 double FullModel::energy(const Eigen::Ref<const Eigen::VectorXd>& x) const {

@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 
 #include "freeflex/dynamics/flexible_body.hpp"
+#include "freeflex/dynamics/zero_order.hpp"  // RigidState
 
 namespace freeflex {
 
@@ -16,6 +17,8 @@ class FullModel {
     Eigen::VectorXd x_dot;  ///< x' from the last rhs()
     Eigen::VectorXd G, b, Mq, Kq, Dzd;  // scratch
     Eigen::VectorXd Hq, Hqd, Gq, Wv;    // scratch of the stiffened model
+    Eigen::VectorXd xq_dot;             ///< [q', q''] from the last prescribed_rhs()
+    Eigen::VectorXd zd_full;            // scratch of prescribed_rhs()
   };
 
   /// Factors the body-frame mass matrix at rest once (see rhs).
@@ -41,6 +44,19 @@ class FullModel {
   bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
            const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
+  /// Prescribed rigid motion (docs/theory.md eq. 13.10): (R, θ) follow `rigid` (its
+  /// position, rate and acceleration at this instant) and only the q rows of eq. 6.2 /
+  /// 13.6 remain, M q'' = Q − Bᵀ Cᵀ R'' − Φ̃ᵀ θ'' + θ'² (M − G_c) q − K q − D_q z'.
+  /// xq = [q, q'] (2n); [q', q''] into data.xq_dot. Always true (M is constant).
+  bool prescribed_rhs(Data& data, const RigidState& rigid, const Eigen::Ref<const Eigen::VectorXd>& xq,
+                      const Eigen::Ref<const Eigen::VectorXd>& commands) const;
+  /// The generalized force [F; M_o] that holds (R, θ) on a prescribed motion: the rigid
+  /// rows of the residual at (z, z', z'') with the loads (eq. 13.11).
+  Eigen::Vector3d constraint_force(const Eigen::Ref<const Eigen::VectorXd>& z,
+                                   const Eigen::Ref<const Eigen::VectorXd>& z_dot,
+                                   const Eigen::Ref<const Eigen::VectorXd>& z_ddot,
+                                   const Eigen::Ref<const Eigen::VectorXd>& commands) const;
+
   /// Invariants with no load (eq. 6.7): T + V, linear momentum, angular momentum about
   /// the inertial origin.
   double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const;
@@ -58,6 +74,7 @@ class FullModel {
                      const Eigen::Ref<const Eigen::VectorXd>& commands) const;
   const FlexibleBody& body_;
   Eigen::MatrixXd rest_inverse_;  ///< 𝕄_b(0)⁻¹
+  Eigen::MatrixXd mq_inverse_;    ///< M⁻¹ (prescribed motion)
 };
 
 }  // namespace freeflex
