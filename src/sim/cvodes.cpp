@@ -7,6 +7,7 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <stdexcept>
 #include <utility>
@@ -54,6 +55,7 @@ Integrator::~Integrator() {
   if (NLS_) SUNNonlinSolFree(NLS_);
   if (LS_) SUNLinSolFree(LS_);
   if (A_) SUNMatDestroy(A_);
+  if (yQ_) N_VDestroy(yQ_);
   if (y_) N_VDestroy(y_);
   if (ctx_) SUNContext_Free(&ctx_);
 }
@@ -104,6 +106,24 @@ void Integrator::gmres(int max_krylov, CVLsPrecSetupFn setup, CVLsPrecSolveFn so
 }
 
 void Integrator::reinit(double t) { check(CVodeReInit(mem_, t, y_), "CVodeReInit"); }
+
+void Integrator::quadrature(CVQuadRhsFn fQ, const double* initial, long dim) {
+  yQ_ = allocated(N_VNew_Serial(static_cast<sunindextype>(dim), ctx_), who_, "N_VNew_Serial");
+  std::copy(initial, initial + dim, N_VGetArrayPointer(yQ_));
+  check(CVodeQuadInit(mem_, fQ, yQ_), "CVodeQuadInit");
+  check(CVodeSetQuadErrCon(mem_, SUNFALSE), "CVodeSetQuadErrCon");
+}
+
+void Integrator::quadrature_reinit(const double* values) {
+  std::copy(values, values + N_VGetLength(yQ_), N_VGetArrayPointer(yQ_));
+  check(CVodeQuadReInit(mem_, yQ_), "CVodeQuadReInit");
+}
+
+const double* Integrator::quadrature_values() {
+  sunrealtype t = 0.0;
+  check(CVodeGetQuad(mem_, &t, yQ_), "CVodeGetQuad");
+  return N_VGetArrayPointer(yQ_);
+}
 
 void Integrator::stop_time(double t) { check(CVodeSetStopTime(mem_, t), "CVodeSetStopTime"); }
 

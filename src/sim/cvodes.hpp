@@ -65,6 +65,15 @@ class Integrator {
   void gmres(int max_krylov, CVLsPrecSetupFn setup, CVLsPrecSolveFn solve, CVLsJacTimesSetupFn jtsetup,
              CVLsJacTimesVecFn jtimes);
 
+  /// Quadratures yQ' = fQ(t, y) of `dim` entries starting from `initial`, integrated
+  /// with the states' own steps and kept out of their error test (CVODES's default): the
+  /// states' solution is the same with or without them.
+  void quadrature(CVQuadRhsFn fQ, const double* initial, long dim);
+  /// Restarts the quadratures from `values` (after reinit).
+  void quadrature_reinit(const double* values);
+  /// The quadratures at the time CVODE last returned (CVodeGetQuad).
+  const double* quadrature_values();
+
   /// Restarts at t from the state's current entries (counters restart too).
   void reinit(double t);
   void stop_time(double t);
@@ -91,6 +100,7 @@ class Integrator {
   std::string who_;
   SUNContext ctx_ = nullptr;
   N_Vector y_ = nullptr;
+  N_Vector yQ_ = nullptr;  ///< quadratures, if any
   void* mem_ = nullptr;
   SUNMatrix A_ = nullptr;
   SUNLinearSolver LS_ = nullptr;

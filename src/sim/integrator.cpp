@@ -33,6 +33,7 @@ struct CallbackData {
   bool failed = false;         ///< a callback failed unrecoverably: every later rhs call fails too
   double rtol = 0.0;
   Eigen::VectorXd atol;        ///< per component
+  Eigen::VectorXd x_quad;      ///< the physical state for the quadrature integrand (a change of variables)
 };
 
 /// CVODES's error weights w_i = 1 / (rtol |y_i| + atol_i), as its own CVodeSVtolerances
@@ -93,6 +94,31 @@ extern "C" int freeflex_cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void
     fail_callback(*data, "right-hand side threw at t = " + fmt(t) + ": " + e.what());
   } catch (...) {
     fail_callback(*data, "right-hand side threw an unknown exception at t = " + fmt(t));
+  }
+  return -1;
+}
+
+extern "C" int freeflex_cvode_quad(sunrealtype t, N_Vector y, N_Vector yQdot, void* user_data) {
+  auto* data = static_cast<CallbackData*>(user_data);
+  if (data->failed) return -1;
+  try {
+    const OdeSystem& sys = *data->system;
+    Eigen::Map<const Eigen::VectorXd> yv(N_VGetArrayPointer(y), data->dim);
+    Eigen::Map<Eigen::VectorXd> out(N_VGetArrayPointer(yQdot), sys.quadrature_dim);
+    const Instant at{t, data->piece_mid};
+    bool ok = false;
+    if (sys.variables.active()) {
+      sys.variables.to_x(at, yv, data->x_quad);
+      ok = sys.quadrature(at, data->x_quad, out);
+    } else {
+      ok = sys.quadrature(at, yv, out);
+    }
+    if (ok && out.allFinite()) return 0;
+    fail_callback(*data, "the quadrature integrand failed or was not finite at t = " + fmt(t));
+  } catch (const std::exception& e) {
+    fail_callback(*data, "the quadrature integrand threw at t = " + fmt(t) + ": " + e.what());
+  } catch (...) {
+    fail_callback(*data, "the quadrature integrand threw an unknown exception at t = " + fmt(t));
   }
   return -1;
 }
@@ -233,9 +259,17 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     throw std::invalid_argument("freeflex::integrate: variables.atol_scale must be empty or " + std::to_string(n) +
                                 " finite entries > 0");
 
+  if (system.quadrature_dim < 0 || (system.quadrature_dim > 0 && !system.quadrature))
+    throw std::invalid_argument("freeflex::integrate: quadrature_dim = " + std::to_string(system.quadrature_dim) +
+                                ", expected 0, or > 0 with system.quadrature set");
+  const int nq = system.quadrature_dim;
+
   IntegrationResult result;
   result.t.resize(static_cast<Eigen::Index>(n_out));
   result.x.resize(static_cast<Eigen::Index>(n_out), n);
+  result.quadrature.setZero(static_cast<Eigen::Index>(n_out), nq);
+  Eigen::VectorXd quad_now = Eigen::VectorXd::Zero(nq);  // the quadratures at the time last reached
+  std::string out_of_range;                               // why the recorded state left the model's range
   Eigen::Index rows = 0;
   Eigen::VectorXd x_scratch(n);
   double piece_mid = t0;  // of the piece whose variables y currently holds
@@ -245,22 +279,43 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     change.to_x(Instant{t, piece_mid}, Eigen::Map<const Eigen::VectorXd>(y, n), x_scratch);
     return x_scratch.data();
   };
+  // Records the state at an output time; false when it is outside the model's range.
   auto record = [&](double t, const double* y) {
     result.t(rows) = t;
     result.x.row(rows) = Eigen::Map<const Eigen::RowVectorXd>(physical(t, y), n);
+    result.quadrature.row(rows) = quad_now.transpose();
     ++rows;
     if (options.progress) options.progress(t);
+    if (system.range_check) {
+      out_of_range = system.range_check(Instant{t, piece_mid}, result.x.row(rows - 1).transpose());
+      if (!out_of_range.empty()) {
+        result.failure_time = t;
+        result.message = "at t = " + fmt(t) + ": " + out_of_range;
+        return false;
+      }
+    }
+    return true;
   };
   auto finish = [&](bool ok) {
-    result.status = ok ? IntegrationStatus::Completed : IntegrationStatus::Failed;
+    result.status = ok ? IntegrationStatus::Completed
+                       : !out_of_range.empty() ? IntegrationStatus::OutOfRange : IntegrationStatus::Failed;
     result.t.conservativeResize(rows);
     result.x.conservativeResize(rows, n);
+    result.quadrature.conservativeResize(rows, nq);
     return result;
   };
 
   result.t(0) = t0;
   result.x.row(0) = x0.transpose();
   rows = 1;
+  if (system.range_check) {
+    out_of_range = system.range_check(Instant{t0, t0}, x0);
+    if (!out_of_range.empty()) {
+      result.failure_time = t0;
+      result.message = "at t = " + fmt(t0) + ": " + out_of_range;
+      return finish(false);
+    }
+  }
   if (n_out == 1) return finish(true);
 
   // Piece boundaries: t0, the breakpoints strictly inside (t0, tend) sorted and deduplicated, tend.
@@ -306,6 +361,10 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
   if (!enter(Instant{t0, data.piece_mid}, x0)) return finish(false);
 
   cv.init(freeflex_cvode_rhs, t0, &data);  // the user data is also what the weights receive
+  if (nq > 0) {
+    data.x_quad.resize(n);
+    cv.quadrature(freeflex_cvode_quad, quad_now.data(), nq);
+  }
   data.rtol = options.rtol;
   data.atol = change.active() && change.atol_scale.size() == n ? Eigen::VectorXd(options.atol * change.atol_scale)
                                                                 : Eigen::VectorXd::Constant(n, options.atol);
@@ -342,6 +401,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
       result.message = "CVODE failed at t = " + fmt(tret) + ": the state became non-finite";
       return false;
     }
+    if (nq > 0) quad_now = Eigen::Map<const Eigen::VectorXd>(cv.quadrature_values(), nq);
     return true;
   };
 
@@ -350,7 +410,8 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     const double a = bounds[k];
     const double b = bounds[k + 1];
     if (roundoff_span(a, b)) {  // a roundoff-sized piece: the state is unchanged over it
-      while (next < n_out && output_times[next] <= b) record(output_times[next++], y);
+      while (next < n_out && output_times[next] <= b)
+        if (!record(output_times[next++], y)) return finish(false);
       continue;
     }
     // CVodeInit was done at t0; every later piece restarts from the current state, mapped
@@ -362,6 +423,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
         if (!enter(Instant{a, data.piece_mid}, x_at_a)) return finish(false);
       }
       cv.reinit(a);
+      if (nq > 0) cv.quadrature_reinit(quad_now.data());
     }
     cv.stop_time(b);
 
@@ -379,8 +441,11 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
         }
         at_end = flag == CV_TSTOP_RETURN || tout == b;
       }
-      record(tout, y);
       ++next;
+      if (!record(tout, y)) {
+        add_statistics();
+        return finish(false);
+      }
     }
     if (!at_end) {
       int flag = 0;

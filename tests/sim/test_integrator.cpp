@@ -367,3 +367,57 @@ TEST_CASE("bad arguments throw std::invalid_argument", "[sim]") {
   CHECK(calls > 0);
 }
 
+
+TEST_CASE("quadratures along the solution, across breakpoints, leave the states unchanged", "[sim]") {
+  const double w = 2.0 * kPi;  // x = cos(w t)
+  long calls = 0;
+  OdeSystem sys = oscillator(w, &calls);
+  IntegratorOptions opt;
+  opt.rtol = 1e-10;
+  opt.atol = 1e-12;
+  const std::vector<double> times = linspace(0.0, 2.0, 21);
+  const Eigen::Vector2d x0(1.0, 0.0);
+  const auto plain = integrate(sys, x0, times, {0.55, 1.3}, opt);
+  sys.quadrature_dim = 2;
+  sys.quadrature = [](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> q) {
+    q(0) = x(0) * x(0);  // ∫ cos² = t/2 + sin(2wt)/(4w)
+    q(1) = at.t;         // ∫ t = t²/2
+    return true;
+  };
+  const auto r = integrate(sys, x0, times, {0.55, 1.3}, opt);
+  INFO(r.message);
+  REQUIRE(r.ok());
+  REQUIRE(plain.ok());
+  // The quadratures stay outside the error test: the states are the same bits.
+  CHECK((r.x - plain.x).cwiseAbs().maxCoeff() == 0.0);
+  REQUIRE(r.quadrature.rows() == 21);
+  REQUIRE(r.quadrature.cols() == 2);
+  for (int i = 0; i < 21; ++i) {
+    const double t = r.t(i);
+    // integrated with the states' steps at rtol 1e-10 (no error control of their own): measured ~1e-10
+    CHECK(r.quadrature(i, 0) == Approx(t / 2 + std::sin(2 * w * t) / (4 * w)).margin(1e-8));
+    CHECK(r.quadrature(i, 1) == Approx(t * t / 2).margin(1e-8));
+  }
+}
+
+TEST_CASE("a range check ends the integration with out_of_range at the first output time outside", "[sim]") {
+  long calls = 0;
+  OdeSystem sys;
+  sys.dim = 1;
+  sys.rhs = [&calls](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xd) {
+    ++calls;
+    xd(0) = x(0);  // x = e^t
+    return true;
+  };
+  sys.range_check = [](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x) {
+    return x(0) > 10.0 ? std::string("x exceeds 10") : std::string();
+  };
+  IntegratorOptions opt;
+  const auto r = integrate(sys, Eigen::VectorXd::Ones(1), linspace(0.0, 5.0, 51), {1.0}, opt);
+  CHECK(r.status == freeflex::IntegrationStatus::OutOfRange);
+  CHECK_FALSE(r.ok());
+  CHECK_THAT(r.message, Contains("x exceeds 10") && Contains("t = 2.4"));  // e^2.3 = 9.97, e^2.4 = 11.0
+  CHECK(r.failure_time == Approx(2.4));
+  CHECK(r.t.size() == 25);  // 0, 0.1, ..., 2.4: the state outside is recorded
+  CHECK(std::string(freeflex::to_string(freeflex::IntegrationStatus::OutOfRange)) == "out_of_range");
+}

@@ -42,6 +42,17 @@ struct OdeSystem {
   /// Integrate other variables than x (identity when not set). `jacobian` is then
   /// ignored: CVODE's difference quotients serve BDF.
   VariableChange variables;
+  /// Optional integrals along the solution, ∫ integrand(t, x) dt from the first output
+  /// time (work done by loads, say): `quadrature_dim` entries, integrated with the
+  /// states' own steps and outside their error test, so the states come out the same with
+  /// or without them. A callback like rhs; false reports a failure.
+  int quadrature_dim = 0;
+  std::function<bool(const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> integrand)>
+      quadrature;
+  /// Optional: called at every output time with the state recorded there; a non-empty
+  /// answer (why the state is outside the model's range) ends the integration at that
+  /// time with IntegrationStatus::OutOfRange. Must not throw.
+  std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x)> range_check;
 };
 
 struct IntegratorOptions {
@@ -65,8 +76,9 @@ void validate(const IntegratorOptions& options);
 
 /// The outcome of an integration, shared by the simulations built on it.
 enum class IntegrationStatus {
-  Completed,  ///< every output time was reached
-  Failed,     ///< CVODE or the right-hand side failed; the message says why and when
+  Completed,   ///< every output time was reached
+  Failed,      ///< CVODE or the right-hand side failed; the message says why and when
+  OutOfRange,  ///< the state left the model's range (OdeSystem::range_check); why and when in the message
 };
 
 struct IntegrationResult {
@@ -76,6 +88,7 @@ struct IntegrationResult {
   double failure_time = 0.0;  ///< time reached when it failed
   Eigen::VectorXd t;          ///< output times actually reached
   Eigen::MatrixXd x;          ///< one row per output time
+  Eigen::MatrixXd quadrature; ///< the OdeSystem's integrals at each output time (quadrature_dim columns)
   long rhs_evaluations = 0;   ///< right-hand side calls (CVODE's count, incl. Jacobian DQ)
   long steps = 0;
 };
@@ -110,8 +123,10 @@ struct EnumNames<IntegratorOptions::Method> {
 template <>
 struct EnumNames<IntegrationStatus> {
   static constexpr const char* what = "integration status";
-  static constexpr std::array<std::pair<IntegrationStatus, const char*>, 2> names{
-      {{IntegrationStatus::Completed, "completed"}, {IntegrationStatus::Failed, "failed"}}};
+  static constexpr std::array<std::pair<IntegrationStatus, const char*>, 3> names{
+      {{IntegrationStatus::Completed, "completed"},
+       {IntegrationStatus::Failed, "failed"},
+       {IntegrationStatus::OutOfRange, "out_of_range"}}};
 };
 
 }  // namespace freeflex
