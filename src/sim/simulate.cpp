@@ -11,6 +11,7 @@
 #include "model/commands.hpp"
 #include "util/format.hpp"
 #include "sim/modal_variables.hpp"
+#include "sim/range_check.hpp"
 
 namespace freeflex {
 namespace {
@@ -62,11 +63,41 @@ std::unique_ptr<ModalVariables> use_variables(SimulationOptions::Variables v, co
                                               OdeSystem& sys, std::shared_ptr<const RigidTrajectory> frame) {
   if (v != SimulationOptions::Variables::Modal) return nullptr;
   auto modal = std::make_unique<ModalVariables>(body, sys.rhs, std::move(frame));
-  sys = modal->system(sys.last_error);
+  OdeSystem over = modal->system(sys.last_error);
+  over.quadrature_dim = sys.quadrature_dim;  // both see the physical state
+  over.quadrature = std::move(sys.quadrature);
+  over.range_check = std::move(sys.range_check);
+  sys = std::move(over);
   return modal;
 }
 
 }  // namespace
+
+Eigen::MatrixXd deflection_sampler(const FlexibleBody& body, int points) {
+  const double a = body.beam().x_left(), b = body.beam().x_right();
+  Eigen::MatrixXd P(points, body.n());
+  for (int i = 0; i < points; ++i) P.row(i) = body.basis().value(i + 1 == points ? b : a + (b - a) * i / (points - 1));
+  return P;
+}
+
+namespace detail {
+
+std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>&)> deflection_check(
+    const FlexibleBody& body, const SimulationOptions& options, int q_offset) {
+  const Eigen::MatrixXd P = deflection_sampler(body);
+  const double length = body.beam().x_right() - body.beam().x_left();
+  const double limit = options.max_deflection_ratio * length;
+  const int n = body.n();
+  return [P, limit, length, n, q_offset](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x) {
+    const double u = (P * x.segment(q_offset, n)).cwiseAbs().maxCoeff();
+    if (u <= limit) return std::string();
+    return "the elastic deflection reached " + util::format_number(u, 4) + " m, " +
+           util::format_number(u / length, 3) +
+           " times the beam's length: the response grows without bound (out of the model's range)";
+  };
+}
+
+}  // namespace detail
 
 std::vector<FieldProblem> problems(const SimulationOptions& o) {
   const auto num = [](double v) { return util::format_number(v, 10); };
@@ -80,6 +111,8 @@ std::vector<FieldProblem> problems(const SimulationOptions& o) {
                                       num(o.duration_s) + ", expected output_step_s <= duration_s"});
   if (!(o.trajectory_step_s > 0.0))
     p.push_back({"trajectory_step_s", "trajectory_step_s = " + num(o.trajectory_step_s) + ", expected > 0"});
+  if (!(o.max_deflection_ratio > 0.0))
+    p.push_back({"max_deflection_ratio", "max_deflection_ratio = " + num(o.max_deflection_ratio) + ", expected > 0"});
   for (const FieldProblem& q : problems(o.integrator)) p.push_back({"integrator." + q.field, "integrator." + q.message});
   return p;
 }
@@ -116,6 +149,20 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
     return true;
   };
   sys.last_error = [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
+  sys.range_check = detail::deflection_check(body, options, 3);
+  // Work of the loads and the damping, ż·(G − D ż), for the energy balance (outside the
+  // error test: the states are the same with or without it).
+  auto uq = std::make_shared<Eigen::VectorXd>(ne);
+  sys.quadrature_dim = 1;
+  sys.quadrature = [&body, &excitation, uq, N](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                               Eigen::Ref<Eigen::VectorXd> w) {
+    detail::evaluate_commands(excitation, at, *uq);
+    const auto zd = x.tail(N);
+    double p = zd.dot(body.generalized_force(x(2), x.segment(3, N - 3), *uq));
+    if (body.damped()) p -= zd.dot(body.damping() * zd);
+    w(0) = p;
+    return true;
+  };
   const auto modal = use_variables(options.full_variables, body, sys, nullptr);
   const IntegrationResult ir =
       integrate(sys, x0, output_times(options), breakpoints_within(excitation, options.duration_s), options.integrator);
@@ -125,6 +172,7 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
   r.t = ir.t;
   r.z = ir.x.leftCols(N);
   r.z_dot = ir.x.rightCols(N);
+  r.work_J = ir.quadrature.col(0);
   r.rhs_evaluations = ir.rhs_evaluations;
   r.steps = ir.steps;
   r.wall_time_s = seconds_since(t0);
@@ -262,6 +310,7 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
     return ss.A.allFinite();
   };
   fsys.last_error = [] { return std::string("the first-order right-hand side is not finite"); };
+  fsys.range_check = detail::deflection_check(body, options, 3);
   const auto modal = use_variables(options.first_order_variables, body, fsys, cached);
   const IntegrationResult fr = integrate(fsys, Eigen::VectorXd::Zero(2 * N), outs, cuts, options.integrator);
   out.first_order_rhs_evaluations = fr.rhs_evaluations;

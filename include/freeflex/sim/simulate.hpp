@@ -29,6 +29,10 @@ struct SimulationOptions {
   enum class Variables { Physical, Modal };
   Variables full_variables = Variables::Physical;      ///< of the full nonlinear model
   Variables first_order_variables = Variables::Modal;  ///< of the first-order model
+  /// A run ends with status out_of_range when the elastic deflection |u(x)| somewhere on
+  /// the beam exceeds this fraction of the beam's length (an inextensible beam cannot bend
+  /// further than its length: the response has grown without bound). Checked at output times.
+  double max_deflection_ratio = 1.0;
 };
 
 /// Every setting out of range, those of `integrator` as "integrator.rtol"; empty when valid.
@@ -46,7 +50,15 @@ struct SimulationResult {
   long rhs_evaluations = 0;
   long steps = 0;
   double wall_time_s = 0.0;
+  /// Full model only: work done on the body from t = 0 to each output time by the loads,
+  /// the damping and (prescribed motion) the force that holds the motion; the energy
+  /// balance is energy(t) - energy(0) = work_J(t). Empty for the perturbation solution.
+  Eigen::VectorXd work_J;
 };
+
+/// Rows Φ(x) at `points` equally spaced points of the beam, ends included: the elastic
+/// deflection u(x) = Φ(x) q there is (this matrix) q.
+Eigen::MatrixXd deflection_sampler(const FlexibleBody& body, int points = 41);
 
 /// Output times 0, dt, 2 dt, ..., duration (the last one exactly).
 std::vector<double> output_times(const SimulationOptions& options);

@@ -1,0 +1,17 @@
+#pragma once
+// The check that ends a run whose elastic deflection has grown past the model's range
+// (SimulationOptions::max_deflection_ratio). Private to src/sim.
+#include <functional>
+#include <string>
+
+#include <Eigen/Dense>
+
+#include "freeflex/sim/simulate.hpp"
+
+namespace freeflex::detail {
+
+/// A range check for OdeSystem: q is at x.segment(q_offset, n).
+std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>&)> deflection_check(
+    const FlexibleBody& body, const SimulationOptions& options, int q_offset);
+
+}  // namespace freeflex::detail
