@@ -16,7 +16,8 @@ namespace {
 template <class R>
 void note(RunResult& run, const R& r) {
   if (r.ok()) return;
-  run.status = StudyStatus::Failed;
+  // a failure outranks a run out of its range
+  run.status = run.status == StudyStatus::Failed || r.status == StudyStatus::Failed ? StudyStatus::Failed : r.status;
   run.message = run.message.empty() ? r.message : run.message + "; " + r.message;
 }
 

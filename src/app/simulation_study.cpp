@@ -8,10 +8,14 @@
 #include <sstream>
 
 #include "app/study_files.hpp"
+#include "util/format.hpp"
 #include "freeflex/app/progress.hpp"
 #include "freeflex/dynamics/full_model.hpp"
 #include "freeflex/io/plot.hpp"
+#include "freeflex/sim/prescribed.hpp"
 #include "freeflex/sim/simulate.hpp"
+
+#include <Eigen/Eigenvalues>
 
 namespace freeflex {
 namespace {
@@ -69,11 +73,96 @@ double drift(const Eigen::MatrixXd& d, int c, int width, double t_from, double s
 }
 
 /// Records a failed run in the study: its reason as a warning and the study's message.
-void fail(SimulationStudyResult& r, const StudyLog& study_log, const std::string& why) {
-  r.status = StudyStatus::Failed;
+void fail(SimulationStudyResult& r, const StudyLog& study_log, const std::string& why,
+          StudyStatus status = StudyStatus::Failed) {
+  r.status = r.status == StudyStatus::Failed ? r.status : status;
   r.message = r.message.empty() ? why : r.message + "; " + why;
   r.warnings.push_back(why);
   if (study_log.warn) study_log.warn(why);
+}
+
+void warn(SimulationStudyResult& r, const StudyLog& study_log, const std::string& w) {
+  r.warnings.push_back(w);
+  if (study_log.warn) study_log.warn(w);
+}
+
+/// The lowest elastic frequency with the reference frame held: sqrt of the smallest
+/// eigenvalue of (K, M). Spin at Ω softens the paper's model by Ω² M (eq. 13.12), which
+/// cancels this mode's stiffness at Ω = ω1: the scale the spin rate is measured against.
+double held_first_frequency(const FlexibleBody& body) {
+  const ModalIntegrals& mi = body.integrals();
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(mi.K, mi.M, Eigen::EigenvaluesOnly);
+  return std::sqrt(std::max(0.0, es.eigenvalues()(0)));
+}
+
+/// A spin rate at this fraction of the held first frequency or more, in a model without
+/// geometric stiffening, draws a warning: its centrifugal softening (Ω/ω1)² of the first
+/// mode's stiffness is then 9 % or more, against a stiffening the model leaves out.
+constexpr double kSpinWarningRatio = 0.3;
+/// A deflection beyond this fraction of the length draws a warning (the shortening is kept
+/// to second order only); the run ends out of range at SimulationOptions::max_deflection_ratio.
+constexpr double kDeflectionWarningRatio = 0.1;
+/// An energy balance off by more than this (relative) draws a warning.
+constexpr double kEnergyBalanceWarning = 1e-4;
+
+/// The range figures of a run and their warnings (`what` names the run in them).
+void assess_range(SimulationStudyResult& r, const StudyLog& study_log, const FlexibleBody& body,
+                  SimulationStudyResult::Solution& s, const FullModel* full, const std::string& what) {
+  const SimulationResult& run = s.run;
+  auto& g = s.range;
+  s.geometric_stiffening = body.geometric_stiffening();
+  g.length_m = body.beam().length();
+  g.first_frequency_rad_s = held_first_frequency(body);
+  const int n = body.n(), T = static_cast<int>(run.t.size());
+  if (T == 0) return;
+  g.peak_spin_rate_rad_s = run.z_dot.col(2).cwiseAbs().maxCoeff();
+  g.spin_ratio = g.first_frequency_rad_s > 0.0 ? g.peak_spin_rate_rad_s / g.first_frequency_rad_s : 0.0;
+  const Eigen::MatrixXd P = deflection_sampler(body);
+  g.peak_deflection_m = (run.z.rightCols(n) * P.transpose()).cwiseAbs().maxCoeff();
+  g.deflection_ratio = g.peak_deflection_m / g.length_m;
+  if (full && run.work_J.size() == T) {
+    const int N = body.dofs();
+    Eigen::VectorXd x(2 * N);
+    x << run.z.row(0).transpose(), run.z_dot.row(0).transpose();
+    const double e0 = full->energy(x);
+    double worst = 0.0, scale = 0.0, de = 0.0;
+    for (int i = 0; i < T; ++i) {
+      x << run.z.row(i).transpose(), run.z_dot.row(i).transpose();
+      de = full->energy(x) - e0;
+      worst = std::max(worst, std::abs(de - run.work_J(i)));
+      scale = std::max({scale, std::abs(de), std::abs(run.work_J(i))});
+    }
+    g.energy_change_J = de;
+    g.work_J = run.work_J(T - 1);
+    g.energy_balance_error_rel = scale > 0.0 ? worst / scale : 0.0;
+    if (*g.energy_balance_error_rel > kEnergyBalanceWarning)
+      warn(r, study_log, what + ": the energy balance is off by " + util::format_number(*g.energy_balance_error_rel, 3) +
+                             " of the work done (energy change " + util::format_number(de, 6) + " J, work " +
+                             util::format_number(*g.work_J, 6) + " J): tighten rtol/atol");
+  }
+  if (!body.geometric_stiffening() && g.spin_ratio >= kSpinWarningRatio)
+    warn(r, study_log, what + ": the spin rate reaches " + util::format_number(g.peak_spin_rate_rad_s, 4) + " rad/s, " +
+                           util::format_number(g.spin_ratio, 3) + " of the first elastic frequency (" +
+                           util::format_number(g.first_frequency_rad_s, 4) +
+                           " rad/s with the reference held), in a model without geometric stiffening: it softens "
+                           "the beam by (spin/frequency)^2 and diverges past 1; set [model] geometric_stiffening = true");
+  if (g.deflection_ratio > kDeflectionWarningRatio && g.deflection_ratio <= 1.0)
+    warn(r, study_log, what + ": the elastic deflection reaches " + util::format_number(g.deflection_ratio, 3) +
+                           " of the beam's length; the model keeps the shortening of the bent beam to second order "
+                           "only (small deflections)");
+}
+
+/// Records a run's outcome: its table (also up to the time a run left its range) or its failure.
+/// `full`: the invariants' columns (a free body); `energy`: the energy balance (full model).
+void settle(SimulationStudyResult& r, const StudyLog& study_log, const FlexibleBody& body,
+            SimulationStudyResult::Solution& s, const FullModel* full, const FullModel* energy, const std::string& what) {
+  const SimulationResult& run = s.run;
+  if (run.ok() || run.status == IntegrationStatus::OutOfRange) {
+    s.table = response_table(body, run, full, s.header);
+    assess_range(r, study_log, body, s, energy, what);
+  }
+  if (run.status == IntegrationStatus::OutOfRange)
+    fail(r, study_log, what + " left its range: " + run.message, StudyStatus::OutOfRange);
 }
 
 }  // namespace
@@ -81,8 +170,11 @@ void fail(SimulationStudyResult& r, const StudyLog& study_log, const std::string
 SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver,
                                            const StudyLog& study_log) {
   const SimulationStudy& st = *design.simulation;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
+  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
+                          design.geometric_stiffening);
   Excitation ex = design.excitation();
+  std::optional<PrescribedMotion> motion;
+  if (design.motion) motion = design.motion->trajectory();
   std::shared_ptr<const RigidTrajectory> nominal;
   if (maneuver && maneuver->flown) {
     // The optimized commands drive their actuators; the optimized motion is the nominal.
@@ -96,6 +188,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
   r.loads_end_s = t_off;
   r.about_maneuver = static_cast<bool>(nominal);
   r.duration_s = st.options.duration_s;
+  r.prescribed_motion = static_cast<bool>(motion);
 
   const FullModel full(body);
   if (st.nonlinear) {
@@ -104,12 +197,12 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     SimulationOptions o = st.options;
     o.integrator.progress = progress.callback();
     SimulationStudyResult::Solution s;
-    s.run = simulate_full(body, ex, o);
+    s.run = motion ? simulate_prescribed(body, ex, *motion, o, false) : simulate_full(body, ex, o);
     const SimulationResult& nl = s.run;
     if (log) *log << progress.resume() << (nl.ok() ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
                   << nl.wall_time_s << " s)" << std::defaultfloat << '\n';
-    if (nl.ok()) {
-      s.table = response_table(body, nl, &full, s.header);
+    settle(r, study_log, body, s, motion ? nullptr : &full, &full, "full nonlinear model");
+    if (nl.ok() && !motion) {
       const Eigen::MatrixXd& nl_table = s.table;
       const int ce = 1 + 2 * (3 + n) + 2;  // vibration_energy_J column (after t, z, z', two tips)
       s.residual_vibration_energy_J = nl_table(nl_table.rows() - 1, ce);
@@ -121,29 +214,61 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       const double H = std::max(nl_table.col(ce + 4).cwiseAbs().maxCoeff(), std::sqrt(2 * mi.I_o * E));
       s.drifts = Eigen::Vector3d(drift(nl_table, ce + 1, 1, t_off, E), drift(nl_table, ce + 2, 2, t_off, P),
                                  drift(nl_table, ce + 4, 1, t_off, H));
-    } else {
+    } else if (nl.status == IntegrationStatus::Failed) {
       fail(r, study_log, "full nonlinear simulation failed: " + nl.message);
+    } else if (nl.ok()) {
+      s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
     }
     r.nonlinear = std::move(s);
+  }
+  if (st.compare_stiffening) {
+    const FlexibleBody other(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
+                             !design.geometric_stiffening);
+    const FullModel other_full(other);
+    const std::string what = std::string("full nonlinear model ") +
+                             (other.geometric_stiffening() ? "with" : "without") + " geometric stiffening (comparison)";
+    if (log) *log << "simulation: " << what << " ... " << std::flush;
+    ProgressReport progress(log, st.options.duration_s);
+    SimulationOptions o = st.options;
+    o.integrator.progress = progress.callback();
+    SimulationStudyResult::Solution s;
+    s.run = motion ? simulate_prescribed(other, ex, *motion, o, false) : simulate_full(other, ex, o);
+    if (log) *log << progress.resume() << to_string(s.run.status) << " (" << s.run.steps << " steps)\n";
+    // the comparison's own range does not change the study's status: it is reported in its entry
+    if (s.run.ok() || s.run.status == IntegrationStatus::OutOfRange) {
+      s.table = response_table(other, s.run, motion ? nullptr : &other_full, s.header);
+      assess_range(r, study_log, other, s, &other_full, what);
+    }
+    if (s.run.status == IntegrationStatus::OutOfRange)
+      warn(r, study_log, what + " left its range: " + s.run.message);
+    else if (!s.run.ok())
+      warn(r, study_log, what + " failed: " + s.run.message);
+    r.comparison = std::move(s);
   }
   if (st.perturbation) {
     if (log) *log << "simulation: perturbation (zero-order, then first-order) ... " << std::flush;
     ProgressReport progress(log, st.options.duration_s);
     SimulationOptions o = st.options;
     o.integrator.progress = progress.callback();
-    const PerturbationResult p =
-        nominal ? simulate_perturbation_about(body, ex, nominal, o) : simulate_perturbation(body, ex, o);
     SimulationStudyResult::Solution s;
-    s.run = p.total;
-    s.zero_order_rhs_evaluations = p.zero_order.rhs_evaluations;
-    s.first_order_rhs_evaluations = p.first_order_rhs_evaluations;
+    if (motion) {
+      s.run = simulate_prescribed(body, ex, *motion, o, true);
+      s.zero_order_rhs_evaluations = 0;
+      s.first_order_rhs_evaluations = s.run.rhs_evaluations;
+    } else {
+      const PerturbationResult p =
+          nominal ? simulate_perturbation_about(body, ex, nominal, o) : simulate_perturbation(body, ex, o);
+      s.run = p.total;
+      s.zero_order_rhs_evaluations = p.zero_order.rhs_evaluations;
+      s.first_order_rhs_evaluations = p.first_order_rhs_evaluations;
+    }
     const SimulationResult& pt = s.run;
     if (log) *log << progress.resume() << (pt.ok() ? "done" : "FAILED") << " (" << pt.steps << " steps, " << std::fixed << std::setprecision(3)
                   << pt.wall_time_s << " s)" << std::defaultfloat << '\n';
+    settle(r, study_log, body, s, nullptr, nullptr, "perturbation solution");
     if (pt.ok()) {
-      s.table = response_table(body, pt, nullptr, s.header);
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
-    } else {
+    } else if (pt.status == IntegrationStatus::Failed) {
       fail(r, study_log, "perturbation simulation failed: " + pt.message);
     }
     r.perturbation = std::move(s);
@@ -168,9 +293,31 @@ namespace detail {
 void write_simulation(const Design& design, const SimulationStudyResult& r, RunOutput& out) {
   const SimulationStudy& st = *design.simulation;
   const int n = design.noa;
-  const bool nl_ok = r.nonlinear && r.nonlinear->run.ok(), pt_ok = r.perturbation && r.perturbation->run.ok();
+  // a run that left its range keeps its table up to that time
+  const bool nl_ok = r.nonlinear && r.nonlinear->table.size(), pt_ok = r.perturbation && r.perturbation->table.size();
   if (nl_ok) out.csv("nonlinear.csv", r.nonlinear->header, r.nonlinear->table);
   if (pt_ok) out.csv("perturbation.csv", r.perturbation->header, r.perturbation->table);
+  const std::string cmp_csv = std::string("nonlinear_stiffening_") + (design.geometric_stiffening ? "off" : "on") + ".csv";
+  const bool cmp_ok = r.comparison && r.comparison->table.size();
+  if (cmp_ok) out.csv(cmp_csv, r.comparison->header, r.comparison->table);
+  if (st.compare_stiffening && (nl_ok || cmp_ok)) {
+    // the tip deflections of every run (columns tip_left_m, tip_right_m after t, z, z')
+    const int c_left = 2 + 2 * (3 + n), c_right = c_left + 1;
+    const std::string own = design.geometric_stiffening ? " (stiffening)" : " (no stiffening)";
+    const std::string other = design.geometric_stiffening ? " (no stiffening)" : " (stiffening)";
+    PlotSpec tips{st.tip_figure, "Tip deflection in the body frame: " + design.title, {}};
+    const double x_left = Beam(design.beam).x_left();
+    for (int c : {c_left, c_right}) {
+      if (c == c_left && x_left == 0.0) continue;  // o at the left end: that tip is clamped
+      const std::string side = c == c_left ? "left tip [m]" : "right tip [m]";
+      std::vector<PlotSeries> series;
+      if (nl_ok) series.push_back({"nonlinear.csv", 1, c, "full nonlinear" + own, "lines"});
+      if (cmp_ok) series.push_back({cmp_csv, 1, c, "full nonlinear" + other, "lines dt 2"});
+      if (pt_ok) series.push_back({"perturbation.csv", 1, c, "first order" + own, "lines dt 3"});
+      tips.panels.push_back({side, "t [s]", side, series});
+    }
+    out.plot(tips, design.plots);
+  }
 
   // Figures in the manner of the paper's Figs. 4-7: both solutions overlaid.
   if (nl_ok || pt_ok) {
@@ -206,11 +353,28 @@ namespace {
 Json run_stats(const SimulationStudyResult::Solution& s) {
   const SimulationResult& r = s.run;
   Json j = Json::object();
-  j["status"] = r.ok() ? "ok" : "failed";
+  j["status"] = r.ok() ? "ok" : to_string(r.status);
   if (!r.ok()) j["message"] = r.message;
+  j["geometric_stiffening"] = s.geometric_stiffening;
   j["rhs_evaluations"] = r.rhs_evaluations;
   j["steps"] = r.steps;
   j["wall_time_s"] = r.wall_time_s;
+  if (s.table.size()) {
+    const auto& g = s.range;
+    Json range = Json::object();
+    range["peak_spin_rate_rad_s"] = g.peak_spin_rate_rad_s;
+    range["first_elastic_frequency_rad_s"] = g.first_frequency_rad_s;
+    range["spin_ratio"] = g.spin_ratio;
+    range["peak_deflection_m"] = g.peak_deflection_m;
+    range["length_m"] = g.length_m;
+    range["deflection_ratio"] = g.deflection_ratio;
+    if (g.energy_balance_error_rel) {
+      range["energy_change_J"] = *g.energy_change_J;
+      range["work_J"] = *g.work_J;
+      range["energy_balance_error_rel"] = *g.energy_balance_error_rel;
+    }
+    j["range"] = range;
+  }
   return j;
 }
 }  // namespace
@@ -220,9 +384,10 @@ Json to_json(const SimulationStudyResult& r) {
   js["loads_end_s"] = r.loads_end_s;
   js["nominal"] = r.about_maneuver ? "optimized maneuver" : "zero-order simulation";
   js["duration_s"] = r.duration_s;
+  js["prescribed_motion"] = r.prescribed_motion;
   if (r.nonlinear) {
     Json j = run_stats(*r.nonlinear);
-    if (r.nonlinear->run.ok()) {
+    if (r.nonlinear->run.ok() && r.nonlinear->drifts) {
       j["residual_vibration_energy_J"] = r.nonlinear->residual_vibration_energy_J;
       j["energy_drift_rel"] = (*r.nonlinear->drifts)(0);
       j["linear_momentum_drift_rel"] = (*r.nonlinear->drifts)(1);
@@ -230,6 +395,9 @@ Json to_json(const SimulationStudyResult& r) {
     }
     js["nonlinear"] = j;
   }
+  if (r.comparison)
+    js[r.comparison->geometric_stiffening ? "nonlinear_stiffening_on" : "nonlinear_stiffening_off"] =
+        run_stats(*r.comparison);
   if (r.perturbation) {
     Json j = run_stats(*r.perturbation);
     j["zero_order_rhs_evaluations"] = r.perturbation->zero_order_rhs_evaluations;

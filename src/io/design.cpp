@@ -61,6 +61,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   d.title = root.string("title", false).value_or(d.title);
   Section model = root.table("model");
   d.noa = static_cast<int>(model.integer("noa", 1, kMaxNoa, false).value_or(d.noa));
+  d.geometric_stiffening = model.boolean("geometric_stiffening", false).value_or(d.geometric_stiffening);
   model.finish();
   io_detail::read_beam(root, d);
   Section out = root.table("output");
@@ -71,6 +72,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   io_detail::read_free_vibration(root, d, outputs);
   const std::vector<std::string> rejected_actuators = io_detail::read_loads_and_actuators(root, d);
   io_detail::read_damping(root, d);
+  io_detail::read_motion(root, d);
   io_detail::read_simulation(root, d, outputs);
   io_detail::read_maneuver(root, d, outputs, rejected_actuators);
   io_detail::read_controller(root, d, outputs, rejected_actuators);

@@ -113,6 +113,8 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs);
 /// the sections naming them do not report them again as unknown.
 std::vector<std::string> read_loads_and_actuators(Section& root, Design& d);
 void read_damping(Section& root, Design& d);
+/// [motion] (io/design_motion.cpp).
+void read_motion(Section& root, Design& d);
 void read_simulation(Section& root, Design& d, Outputs& outputs);
 void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
 void read_controller(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);

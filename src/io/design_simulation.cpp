@@ -56,15 +56,23 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
     s.problem("nonlinear", s.key_path("nonlinear") + " and perturbation are both false: nothing to simulate");
   if (auto name = s.string("rigid_figure", false, true)) st.rigid_figure = *name;
   if (auto name = s.string("elastic_figure", false, true)) st.elastic_figure = *name;
+  st.compare_stiffening = s.boolean("compare_stiffening", false).value_or(st.compare_stiffening);
+  if (auto name = s.string("tip_figure", false, true)) st.tip_figure = *name;
+  if (st.compare_stiffening && !st.nonlinear)
+    s.problem("compare_stiffening", s.key_path("compare_stiffening") + " = true needs nonlinear = true (it reruns the full model)");
   s.finish();
   outputs.named(s, "rigid_figure", st.rigid_figure, {".gp", ".png"});
   outputs.named(s, "elastic_figure", st.elastic_figure, {".gp", ".png"});
   if (st.nonlinear) outputs.fixed("[simulation]", "nonlinear.csv");
   if (st.perturbation) outputs.fixed("[simulation]", "perturbation.csv");
+  if (st.compare_stiffening) {
+    outputs.fixed("[simulation]", d.geometric_stiffening ? "nonlinear_stiffening_off.csv" : "nonlinear_stiffening_on.csv");
+    outputs.named(s, "tip_figure", st.tip_figure, {".gp", ".png"});
+  }
   // a [[load]] that has problems of its own is not missing as well
-  if (!root.has("load") && !root.has("maneuver"))
-    s.problem("duration_s", "[simulation] needs at least one [[load]] or a [maneuver] to respond to");
-  if (dur && !d.loads.empty() && !root.has("maneuver")) {
+  if (!root.has("load") && !root.has("maneuver") && !root.has("motion"))
+    s.problem("duration_s", "[simulation] needs at least one [[load]], a [maneuver] or a [motion] to respond to");
+  if (dur && !d.loads.empty() && !root.has("maneuver") && !root.has("motion")) {
     double first = std::numeric_limits<double>::infinity();
     for (const auto& l : d.loads) first = std::min(first, l.profile.times().front());
     if (first >= *dur)

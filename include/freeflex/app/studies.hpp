@@ -22,13 +22,14 @@ namespace freeflex {
 
 /// The outcome of a study: ok, or failed for the reason in its message (a numerical
 /// failure: the command line exits 1).
-enum class StudyStatus { Ok, Failed };
+/// OutOfRange: a simulation left its model's range (a response that grew without bound).
+enum class StudyStatus { Ok, Failed, OutOfRange };
 
 template <>
 struct EnumNames<StudyStatus> {
   static constexpr const char* what = "study status";
-  static constexpr std::array<std::pair<StudyStatus, const char*>, 2> names{
-      {{StudyStatus::Ok, "ok"}, {StudyStatus::Failed, "failed"}}};
+  static constexpr std::array<std::pair<StudyStatus, const char*>, 3> names{
+      {{StudyStatus::Ok, "ok"}, {StudyStatus::Failed, "failed"}, {StudyStatus::OutOfRange, "out_of_range"}}};
 };
 
 /// Where a study reports while it runs: progress lines on `log` (may be null), and each
@@ -102,8 +103,25 @@ struct SimulationStudyResult {
     /// Full model: drift of energy, linear and angular momentum after the loads end,
     /// relative to their peaks.
     std::optional<Eigen::Vector3d> drifts;
+    bool geometric_stiffening = false;  ///< of the model that ran
+    /// Where the run stands against its model's range (summary.json "range").
+    struct Range {
+      double peak_spin_rate_rad_s = 0.0;
+      double first_frequency_rad_s = 0.0;  ///< lowest elastic frequency with the reference frame held
+      double spin_ratio = 0.0;             ///< peak spin rate / first_frequency
+      double peak_deflection_m = 0.0;      ///< largest |u(x)| over the beam and the run
+      double length_m = 0.0;
+      double deflection_ratio = 0.0;       ///< peak deflection / length
+      /// Full model: energy(t_end) − energy(0), the work done on the body over the run,
+      /// and the largest |energy change − work| over the run relative to the largest of either.
+      std::optional<double> energy_change_J, work_J, energy_balance_error_rel;
+    };
+    Range range;
   };
   std::optional<Solution> nonlinear, perturbation;
+  /// [simulation] compare_stiffening: the full model with geometric stiffening flipped.
+  std::optional<Solution> comparison;
+  bool prescribed_motion = false;  ///< [motion]: the reference motion was prescribed
   struct Differences {
     double max_abs_dR_m = 0.0, max_abs_dtheta_rad = 0.0, max_abs_dq = 0.0, max_rigid_difference = 0.0;
   };

@@ -14,6 +14,7 @@
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/model/beam.hpp"
 #include "freeflex/model/loads.hpp"
+#include "freeflex/sim/prescribed.hpp"
 #include "freeflex/sim/simulate.hpp"
 #include "freeflex/trajopt/problem.hpp"
 
@@ -91,6 +92,21 @@ struct SimulationStudy {
   bool perturbation = true;
   std::string rigid_figure = "rigid_motion";
   std::string elastic_figure = "generalized_displacements";
+  /// Run the full model a second time with [model] geometric_stiffening flipped
+  /// (nonlinear_stiffening_off.csv or _on.csv) and overlay the tip deflections of every
+  /// run in `tip_figure`.
+  bool compare_stiffening = false;
+  std::string tip_figure = "tip_deflection";
+};
+
+/// [motion]: the reference frame's motion prescribed instead of driven by loads
+/// (docs/theory.md section 13.4): θ(t) and the hub centre's x(t), y(t), each at rest,
+/// a spin-up ramp or a table with rates and accelerations; o at hub_radius_m from the
+/// centre along the body x axis. With o at an end of the beam: a clamped appendage.
+struct MotionSpec {
+  MotionProfile x, y, theta;
+  double hub_radius_m = 0.0;
+  PrescribedMotion trajectory() const { return PrescribedMotion(x, y, theta, hub_radius_m); }
 };
 
 /// [maneuver]: an optimal rigid maneuver with the design's actuators.
@@ -129,6 +145,11 @@ struct Design {
   std::string title;
   BeamProperties beam;
   int noa = 6;         ///< [model] number of admissible functions
+  /// [model] geometric_stiffening: keep the foreshortening of the bent beam (docs/theory.md
+  /// section 13). On unless a design says otherwise: the paper's model is linear-elastic
+  /// in the floating frame and fails on spinning structures (Kane, Ryan and Banerjee).
+  bool geometric_stiffening = true;
+  std::optional<MotionSpec> motion;  ///< [motion]: prescribed reference motion
   bool plots = true;   ///< [output] write PNG figures with gnuplot
   std::vector<LoadSpec> loads;
   std::vector<ActuatorSpec> actuators;
