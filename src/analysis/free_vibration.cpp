@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
+
+#include <Eigen/Eigenvalues>
 
 namespace freeflex {
 
@@ -29,6 +32,20 @@ Eigen::MatrixXd rest_stiffness_matrix(const ModalIntegrals& mi) {
   Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(3 + n, 3 + n);
   K0.block(3, 3, n, n) = mi.K;
   return K0;
+}
+
+Eigen::VectorXd spinning_frequencies_squared(const ModalIntegrals& mi, double spin, bool stiffening) {
+  if (!std::isfinite(spin))
+    throw std::invalid_argument("spinning_frequencies_squared: spin_rad_s = " + std::to_string(spin) +
+                                ", expected a finite value");
+  if (stiffening && mi.G_c.rows() != mi.size())
+    throw std::invalid_argument("spinning_frequencies_squared: the integrals have no G_c (use stiffened_modal_integrals)");
+  Eigen::MatrixXd Ks = mi.K - spin * spin * mi.M;
+  if (stiffening) Ks += spin * spin * mi.G_c;
+  Ks = 0.5 * (Ks + Ks.transpose()).eval();
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(Ks, mi.M, Eigen::EigenvaluesOnly);
+  if (es.info() != Eigen::Success) throw std::runtime_error("spinning_frequencies_squared: M is not positive definite");
+  return es.eigenvalues();
 }
 
 FreeVibrationResult free_vibration(const ModalIntegrals& mi) {

@@ -80,6 +80,31 @@ FreeVibrationStudyResult run_free_vibration_study(const Design& design, const St
     if (log) *log << '\n';
   }
 
+  if (!study.spin_rates.empty()) {
+    // Frequencies under steady spin, hub held (eq. 13.12), at the model's NOA.
+    const ModalIntegrals mi = stiffened_modal_integrals(beam, make_basis(beam, design.noa));
+    const int shown = std::min(design.noa, study.modes);
+    r.spinning_header = {"spin_rad_s", "mode", "omega2_stiffened", "omega_stiffened_rad_s", "omega2_unstiffened",
+                         "omega_unstiffened_rad_s"};
+    r.spinning_table.resize(static_cast<int>(study.spin_rates.size()) * shown, 6);
+    int row = 0;
+    for (double spin : study.spin_rates) {
+      const Eigen::VectorXd with = spinning_frequencies_squared(mi, spin, true);
+      const Eigen::VectorXd without = spinning_frequencies_squared(mi, spin, false);
+      auto root = [](double w2) { return w2 >= 0.0 ? std::sqrt(w2) : kNaN; };
+      for (int k = 0; k < shown; ++k, ++row)
+        r.spinning_table.row(row) << spin, k + 1, with(k), root(with(k)), without(k), root(without(k));
+      if (without(0) < 0.0) {
+        const std::string why = "at a spin of " + std::to_string(spin) +
+                                " rad/s the model without geometric stiffening has buckled (first omega^2 = " +
+                                std::to_string(without(0)) + " < 0); with stiffening omega = " +
+                                std::to_string(root(with(0))) + " rad/s";
+        r.warnings.push_back(why);
+        if (study_log.warn) study_log.warn(why);
+      }
+    }
+  }
+
   for (const ModeShapeRequest& req : study.mode_shapes) {
     const AdmissibleBasis basis = make_basis(beam, req.noa);
     const FreeVibrationResult res = free_vibration(modal_integrals(beam, basis));
@@ -122,6 +147,7 @@ namespace detail {
 void write_free_vibration(const Design& design, const FreeVibrationStudyResult& r, RunOutput& out) {
   const FreeVibrationStudy& study = *design.free_vibration;
   out.csv(study.table_name + ".csv", r.table_header, r.table);
+  if (r.spinning_table.size()) out.csv(study.spinning_table_name + ".csv", r.spinning_header, r.spinning_table);
   for (const auto& shape : r.mode_shapes) {
     out.csv(shape.name + ".csv", shape.header, shape.data);
     PlotPanel panel{"", "distance from the left end s [m]", "normalized transverse displacement", {}};
@@ -146,6 +172,7 @@ Json to_json(const Design& design, const FreeVibrationStudyResult& r) {
     freqs.push_back(entry);
   }
   fv["frequencies"] = freqs;
+  if (r.spinning_table.size()) fv["spinning_table"] = design.free_vibration->spinning_table_name + ".csv";
   Json shapes = Json::array();
   for (const auto& shape : r.mode_shapes) {
     Json entry = Json::object();

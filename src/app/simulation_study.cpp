@@ -115,7 +115,18 @@ void assess_range(SimulationStudyResult& r, const StudyLog& study_log, const Fle
   g.first_frequency_rad_s = held_first_frequency(body);
   const int n = body.n(), T = static_cast<int>(run.t.size());
   if (T == 0) return;
-  g.peak_spin_rate_rad_s = run.z_dot.col(2).cwiseAbs().maxCoeff();
+  // The spin rate: the prescribed θ', or for a free body the rate of its angular momentum
+  // about o over its inertia about o, θ' + Φ̃ q' / (I_o + qᵀ M q), which leaves out the
+  // wobble of a frame tied to the slope at o (eq. 6.7).
+  const ModalIntegrals& mi = body.integrals();
+  for (int i = 0; i < T; ++i) {
+    double w = run.z_dot(i, 2);
+    if (!r.prescribed_motion) {
+      const Eigen::VectorXd q = run.z.row(i).tail(n).transpose();
+      w += mi.Phi_tilde.dot(run.z_dot.row(i).tail(n)) / (mi.I_o + q.dot(mi.M * q));
+    }
+    g.peak_spin_rate_rad_s = std::max(g.peak_spin_rate_rad_s, std::abs(w));
+  }
   g.spin_ratio = g.first_frequency_rad_s > 0.0 ? g.peak_spin_rate_rad_s / g.first_frequency_rad_s : 0.0;
   const Eigen::MatrixXd P = deflection_sampler(body);
   g.peak_deflection_m = (run.z.rightCols(n) * P.transpose()).cwiseAbs().maxCoeff();
@@ -157,6 +168,7 @@ void assess_range(SimulationStudyResult& r, const StudyLog& study_log, const Fle
 void settle(SimulationStudyResult& r, const StudyLog& study_log, const FlexibleBody& body,
             SimulationStudyResult::Solution& s, const FullModel* full, const FullModel* energy, const std::string& what) {
   const SimulationResult& run = s.run;
+  s.geometric_stiffening = body.geometric_stiffening();
   if (run.ok() || run.status == IntegrationStatus::OutOfRange) {
     s.table = response_table(body, run, full, s.header);
     assess_range(r, study_log, body, s, energy, what);
@@ -199,7 +211,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     SimulationStudyResult::Solution s;
     s.run = motion ? simulate_prescribed(body, ex, *motion, o, false) : simulate_full(body, ex, o);
     const SimulationResult& nl = s.run;
-    if (log) *log << progress.resume() << (nl.ok() ? "done" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
+    if (log) *log << progress.resume() << (nl.ok() ? "done" : nl.status == IntegrationStatus::OutOfRange ? "OUT OF RANGE" : "FAILED") << " (" << nl.steps << " steps, " << std::fixed << std::setprecision(3)
                   << nl.wall_time_s << " s)" << std::defaultfloat << '\n';
     settle(r, study_log, body, s, motion ? nullptr : &full, &full, "full nonlinear model");
     if (nl.ok() && !motion) {

@@ -4,11 +4,17 @@
 // with --quiet), 2 bad input (nothing written), 3 results could not be written.
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <cstdlib>
 #include <iomanip>
+#include <limits>
 #include <iostream>
 #include <string>
 
+#include "freeflex/analysis/free_vibration.hpp"
 #include "freeflex/app/run.hpp"
+#include "freeflex/model/beam.hpp"
+#include "freeflex/model/modal_integrals.hpp"
 #include "freeflex/io/output.hpp"
 #include "freeflex/model/basis.hpp"
 #include "freeflex/version.hpp"
@@ -26,6 +32,8 @@ struct Args {
   std::string design, out, format = "table", noa_text;
   int noa = 0;  ///< 0: the design's model.noa
   bool quiet = false;
+  std::string spin_text;        ///< --spin: steady spin rate [rad/s], reference frame held
+  std::string stiffening = "";  ///< --stiffening on|off (default: the design's model)
 };
 
 /// --noa as a number of admissible functions; throws UsageError.
@@ -37,8 +45,43 @@ int parse_noa(const std::string& text) {
   return static_cast<int>(n);
 }
 
+/// `freeflex modes --spin W`: frequencies with the reference frame held spinning at W
+/// (docs/theory.md eq. 13.12); NaN for a mode the spin has buckled (ω² < 0).
+int cmd_spinning_modes(const Args& a, const Design& d, int noa) {
+  char* end = nullptr;
+  const double spin = a.spin_text.empty() ? 0.0 : std::strtod(a.spin_text.c_str(), &end);
+  if (!a.spin_text.empty() && (*end != '\0' || !std::isfinite(spin) || std::abs(spin) > 1e6))
+    throw UsageError{"--spin " + a.spin_text + ": must be a number of rad/s in [-1e6, 1e6]"};
+  const bool stiff = a.stiffening.empty() ? d.geometric_stiffening : a.stiffening == "on";
+  const Beam beam(d.beam);
+  const Eigen::VectorXd w2 = spinning_frequencies_squared(stiffened_modal_integrals(beam, make_basis(beam, noa)), spin, stiff);
+  auto omega = [](double x) { return x >= 0.0 ? std::sqrt(x) : std::numeric_limits<double>::quiet_NaN(); };
+  std::cout << std::setprecision(12);
+  if (a.format == "csv") {
+    std::cout << "mode,omega_rad_s,omega2\n";
+    for (int k = 0; k < w2.size(); ++k) std::cout << k + 1 << ',' << omega(w2(k)) << ',' << w2(k) << '\n';
+  } else if (a.format == "json") {
+    nlohmann::ordered_json j;
+    j["design"] = d.source;
+    j["noa"] = noa;
+    j["spin_rad_s"] = spin;
+    j["geometric_stiffening"] = stiff;
+    j["omega2"] = std::vector<double>(w2.data(), w2.data() + w2.size());
+    std::cout << j.dump(2) << '\n';
+  } else {
+    std::cout << "elastic modes of '" << d.source << "', NOA = " << noa << ", spinning at " << spin
+              << " rad/s with the reference frame held, geometric stiffening " << (stiff ? "on" : "off") << "\n"
+              << std::setw(5) << "mode" << std::setw(18) << "omega [rad/s]" << std::setw(20) << "omega^2" << '\n';
+    for (int k = 0; k < w2.size(); ++k)
+      std::cout << std::setw(5) << k + 1 << std::fixed << std::setprecision(6) << std::setw(18) << omega(w2(k))
+                << std::setw(20) << w2(k) << std::defaultfloat << (w2(k) < 0.0 ? "  (buckled)" : "") << '\n';
+  }
+  return kExitOk;
+}
+
 int cmd_modes(const Args& a, const Design& d) {
   const int noa = a.noa > 0 ? a.noa : d.noa;
+  if (!a.spin_text.empty() || !a.stiffening.empty()) return cmd_spinning_modes(a, d, noa);
   const ModeTable t = mode_table(d, noa);
   std::cout << std::setprecision(12);
   if (a.format == "csv") {
@@ -88,6 +131,10 @@ int main(int argc, char** argv) {
   modes->add_option("DESIGN", args.design, "design file (TOML)")->required();
   modes->add_option("--noa", args.noa_text, "number of admissible functions, 1..100 (default: the design's model.noa)");
   modes->add_option("--format", args.format, "table, csv or json")->check(CLI::IsMember({"table", "csv", "json"}));
+  modes->add_option("--spin", args.spin_text,
+                    "steady spin rate [rad/s]: frequencies with the reference frame held spinning (default 0 with --stiffening)");
+  modes->add_option("--stiffening", args.stiffening, "on or off: geometric stiffening under --spin (default: the design's model)")
+      ->check(CLI::IsMember({"on", "off"}));
   CLI::App* run = app.add_subcommand("run", "does what the design asks; writes results and summary.json into DIR");
   run->add_option("DESIGN", args.design, "design file (TOML)")->required();
   run->add_option("--out", args.out, "output directory (created if needed)")->required();
@@ -122,6 +169,9 @@ int main(int argc, char** argv) {
   }
   try {
     return modes->parsed() ? cmd_modes(args, design) : cmd_run(args, design);
+  } catch (const UsageError& e) {
+    std::cerr << "freeflex: " << e.message << '\n';
+    return kExitBadInput;
   } catch (const std::invalid_argument& e) {
     std::cerr << "freeflex: " << e.what() << '\n';
     return kExitBadInput;

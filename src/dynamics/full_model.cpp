@@ -9,6 +9,9 @@
 
 namespace freeflex {
 namespace {
+constexpr double kMinMassDeterminantRatio = 1e-3;  ///< of det 𝕄_b(q) / det 𝕄_b(0), stiffened model
+}  // namespace
+namespace {
 using planar::rot;
 const Eigen::Matrix2d& kJ = planar::J();
 }  // namespace
@@ -220,9 +223,14 @@ bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& 
   S(2, 2) = qMq;
   S(0, 3) = S(3, 0) = -1.0;
   const Eigen::Matrix4d core = Eigen::Matrix4d::Identity() + UWU * S;
-  // det 𝕄_b = det 𝕄_b(0) · det(core): a non-positive value means 𝕄 is not positive definite
+  // det 𝕄_b = det 𝕄_b(0) · det(core): a non-positive value means 𝕄 is not positive
+  // definite. The kinetic energy is kept to second order in q: once 𝕄_b(q) has lost all
+  // but kMinMassDeterminantRatio of the determinant at rest, the dropped higher-order terms
+  // are of the size of what is left (a frame whose own rotary inertia the bending has used
+  // up, say); the accelerations grow without bound as det → 0 and the state is out of the
+  // model's range.
   const double det = core.determinant();
-  if (!(det > 0.0)) return false;
+  if (!(det > kMinMassDeterminantRatio)) return false;
   const Eigen::Vector4d Uy(w(0), w(1), w(2), d.Hq.dot(w.tail(n)));
   const Eigen::Vector4d zc = S * core.partialPivLu().solve(Uy);
   w.noalias() -= WU * zc;

@@ -18,6 +18,10 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
   fv.paper_table = s.boolean("paper_table", false).value_or(fv.paper_table);
   fv.table_name = s.string("table_name", false, true).value_or(fv.table_name);
   outputs.named(s, "table_name", fv.table_name, {".csv"});
+  if (auto v = s.number_array("spin_rates_deg_s", Range::nonnegative().supported(-kInf, lim::kMaxRate_deg_s), false))
+    for (double w : *v) fv.spin_rates.push_back(w * M_PI / 180.0);
+  fv.spinning_table_name = s.string("spinning_table_name", false, true).value_or(fv.spinning_table_name);
+  if (!fv.spin_rates.empty()) outputs.named(s, "spinning_table_name", fv.spinning_table_name, {".csv"});
   for (auto& m : s.table_array("mode_shape")) {
     ModeShapeRequest r;
     auto name = m.string("name", true, true);

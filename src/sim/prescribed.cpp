@@ -1,5 +1,5 @@
 // Prescribed rigid motion: the profiles of the reference frame's coordinates and the
-// simulation of the elastic response to them (docs/theory.md section 13.4).
+// simulation of the elastic response to them (docs/theory.md section 13, eq. 13.10).
 #include "freeflex/sim/prescribed.hpp"
 
 #include <algorithm>

@@ -41,7 +41,7 @@ TEST_CASE("bad values name key, line, value and allowed range", "[io]") {
   CHECK_THAT(problems_of("[beam]\nlength_m = nan\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n"),
              Contains("line 2: beam.length_m = nan, must be a finite number"));
   CHECK_THAT(problems_of(std::string(kGood) + "noa_typo = 3\n"),
-             Contains("line 8: unknown key 'model.noa_typo' (allowed here: noa)"));
+             Contains("line 8: unknown key 'model.noa_typo' (allowed here: geometric_stiffening, noa)"));
   CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n[model]\nnoa = 0\n"),
              Contains("line 6: model.noa = 0, must be a whole number in [1, 100]"));
   CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n[model]\nnoa = 101\n"),
@@ -260,3 +260,40 @@ TEST_CASE("controller keys load, bad weights, horizons and names are reported", 
              Contains("line 20: controller.actuators: \"rudder\" is not an [[actuator]] (known: 'hub')"));
 }
 
+
+TEST_CASE("[model] geometric_stiffening and [motion]: keys, defaults and every problem at once", "[io]") {
+  const std::string beam = "[beam]\nlength_m = 10.0\nmass_kg = 12.0\nbending_stiffness_Nm2 = 14000.0\nreference_m = 0.0\n";
+  const std::string sim = "[simulation]\nduration_s = 1.0\n";
+  {
+    const Design d = parse_design(beam + "[motion.theta]\ntype = \"spin_up\"\nfinal_rate_deg_s = 180.0\nramp_time_s = 2.0\n" + sim,
+                                  "t.toml");
+    CHECK(d.geometric_stiffening);  // the default for a design that does not say
+    REQUIRE(d.motion);
+    CHECK(d.motion->theta.kind() == MotionProfile::Kind::SpinUp);
+    CHECK(d.motion->theta.at(3.0)(1) == Approx(M_PI));  // 180 deg/s, held after the ramp
+    CHECK(d.motion->x.kind() == MotionProfile::Kind::Rest);
+  }
+  {
+    const Design d = parse_design(beam + "[model]\ngeometric_stiffening = false\n[motion]\nhub_radius_m = 0.5\n"
+                                         "[motion.theta]\ntype = \"table\"\ntimes_s = [0.0, 1.0]\nvalues_deg = [0.0, 90.0]\n"
+                                         "rates_deg_s = [0.0, 180.0]\naccelerations_deg_s2 = [180.0, 180.0]\n" + sim,
+                                  "t.toml");
+    CHECK_FALSE(d.geometric_stiffening);
+    REQUIRE(d.motion);
+    CHECK(d.motion->hub_radius_m == 0.5);
+    CHECK(d.motion->theta.at(1.0)(0) == Approx(M_PI / 2));
+  }
+  const std::string bad = problems_of(beam +
+                                      "[motion.theta]\ntype = \"spin_up\"\nramp_time_s = 0.0\n"        // lines 6-8
+                                      "[motion.x]\ntype = \"table\"\ntimes_s = [1.0, 2.0]\nvalues_m = [0.0, 1.0]\n"
+                                      "rates_m_s = [0.0, 1.0]\naccelerations_m_s2 = [0.0, 0.0]\n"      // lines 9-14
+                                      "[motion.y]\ntype = \"wobble\"\n" + sim);                         // lines 15-16
+  CHECK_THAT(bad, Contains("motion.theta.final_rate_deg_s") && Contains("required"));
+  CHECK_THAT(bad, Contains("line 8: motion.theta.ramp_time_s = 0.0, must be > 0"));
+  CHECK_THAT(bad, Contains("motion.x.times_s") && Contains("the times must start at 0"));
+  CHECK_THAT(bad, Contains("line 16: motion.y.type") && Contains("wobble"));
+  CHECK_THAT(problems_of(beam + "[motion]\nhub_radius_m = 1.0\n" + sim), Contains("[motion] prescribes nothing"));
+  CHECK_THAT(problems_of(beam + "[simulation]\nduration_s = 1.0\ncompare_stiffening = true\nnonlinear = false\n"
+                                "[motion.theta]\ntype = \"spin_up\"\nfinal_rate_deg_s = 1.0\nramp_time_s = 1.0\n"),
+             Contains("compare_stiffening = true needs nonlinear = true"));
+}

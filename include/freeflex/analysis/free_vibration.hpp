@@ -24,6 +24,14 @@ struct FreeVibrationResult {
 /// positive definite (a model error, not user input).
 FreeVibrationResult free_vibration(const ModalIntegrals& mi);
 
+/// Elastic frequencies under steady spin Ω about o with the reference frame held (a hub
+/// turning at a constant rate; docs/theory.md eq. 13.12): the eigenvalues ω² of
+/// (K − Ω² (M − G_c), M), ascending; without stiffening, of (K − Ω² M, M) (each mode
+/// then softens as ω² = ω0² − Ω²). A negative ω² is a mode the spin has buckled. `mi`
+/// needs G_c (stiffened_modal_integrals) when `stiffening`. Throws std::invalid_argument
+/// for a spin that is not finite or G_c missing.
+Eigen::VectorXd spinning_frequencies_squared(const ModalIntegrals& mi, double spin_rad_s, bool stiffening);
+
 inline double to_hz(double omega_rad_s) { return omega_rad_s / (2.0 * M_PI); }
 
 /// The paper's Table 1 quantity lambda = sqrt(omega sqrt(m L^3 / EI)) (dimensionless; the

@@ -67,6 +67,10 @@ struct FreeVibrationStudyResult {
     std::optional<double> max_abs_difference;  ///< against the exact free-free mode, where it applies
   };
   std::vector<ModeShape> mode_shapes;
+  /// [free_vibration] spin_rates_deg_s: one row per (spin rate, mode): spin_rad_s, mode,
+  /// omega2 and omega (NaN where ω² < 0: buckled) with and without stiffening.
+  std::vector<std::string> spinning_header;
+  Eigen::MatrixXd spinning_table;
 };
 FreeVibrationStudyResult run_free_vibration_study(const Design& design, const StudyLog& log = {});
 

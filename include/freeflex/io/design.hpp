@@ -71,6 +71,10 @@ struct FreeVibrationStudy {
   bool paper_table = false;          ///< add the paper's printed Table 1 beside ours
   std::string table_name = "frequencies";
   std::vector<ModeShapeRequest> mode_shapes;
+  /// Steady spin rates [rad/s] (read in deg/s): elastic frequencies with the reference frame
+  /// held spinning, with and without geometric stiffening, into spinning_table_name.csv.
+  std::vector<double> spin_rates;
+  std::string spinning_table_name = "spinning_frequencies";
 };
 
 /// A load: a force element driven by a time profile ([[load]]).
@@ -100,7 +104,7 @@ struct SimulationStudy {
 };
 
 /// [motion]: the reference frame's motion prescribed instead of driven by loads
-/// (docs/theory.md section 13.4): θ(t) and the hub centre's x(t), y(t), each at rest,
+/// (docs/theory.md section 13, eq. 13.10): θ(t) and the hub centre's x(t), y(t), each at rest,
 /// a spin-up ramp or a table with rates and accelerations; o at hub_radius_m from the
 /// centre along the body x axis. With o at an end of the beam: a clamped appendage.
 struct MotionSpec {

@@ -52,7 +52,8 @@ struct SimulationResult {
   double wall_time_s = 0.0;
   /// Full model only: work done on the body from t = 0 to each output time by the loads,
   /// the damping and (prescribed motion) the force that holds the motion; the energy
-  /// balance is energy(t) - energy(0) = work_J(t). Empty for the perturbation solution.
+  /// balance is energy(t) - energy(0) = work_J(t). Empty for the perturbation solution and
+  /// for the full model in modal variables (their long steps would alias the power).
   Eigen::VectorXd work_J;
 };
 

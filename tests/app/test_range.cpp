@@ -1,0 +1,77 @@
+// Runs that know their range (issue 14, acceptance 6): the warning of a model without
+// stiffening spun near its first frequency, none for a motion far from it, and an
+// unbounded response reported out_of_range with its reason.
+#include <catch2/catch.hpp>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "freeflex/app/studies.hpp"
+#include "freeflex/io/design.hpp"
+
+using namespace freeflex;
+
+namespace {
+std::string shipped(const std::string& stem) {
+  std::ifstream in(std::string(FREEFLEX_SOURCE_DIR) + "/designs/" + stem + ".toml");
+  REQUIRE(in);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+bool mentions(const std::vector<std::string>& warnings, const std::string& what) {
+  for (const auto& w : warnings)
+    if (w.find(what) != std::string::npos) return true;
+  return false;
+}
+/// `text` with the first occurrence of `from` replaced by `to` (which must be there).
+std::string edited(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  return text.replace(at, from.size(), to);
+}
+}  // namespace
+
+TEST_CASE("the KRB spin-up: stiffened ok; without stiffening a warning and out_of_range", "[app]") {
+  const std::string text = shipped("spinup_krb");
+  {
+    const Design d = parse_design(edited(text, "compare_stiffening = true", "compare_stiffening = false"), "krb.toml");
+    const SimulationStudyResult r = run_simulation_study(d);
+    INFO(r.message);
+    CHECK(r.ok());
+    CHECK_FALSE(mentions(r.warnings, "without geometric stiffening"));
+    REQUIRE(r.nonlinear);
+    CHECK(r.nonlinear->range.spin_ratio == Approx(4.0 / 3.7977305).epsilon(1e-6));
+    CHECK(r.nonlinear->range.deflection_ratio == Approx(0.0400).margin(1e-4));  // 0.4003 m of 10 m
+    // the energy balance of the prescribed motion: work of the hub against the energy (measured 4e-11)
+    REQUIRE(r.nonlinear->range.energy_balance_error_rel);
+    CHECK(*r.nonlinear->range.energy_balance_error_rel < 1e-8);
+  }
+  {
+    std::string off = edited(text, "geometric_stiffening = true", "geometric_stiffening = false");
+    off = edited(off, "compare_stiffening = true", "compare_stiffening = false");
+    const Design d = parse_design(off, "krb_off.toml");
+    const SimulationStudyResult r = run_simulation_study(d);
+    CHECK(r.status == StudyStatus::OutOfRange);
+    CHECK_THAT(r.message, Catch::Matchers::Contains("grows without bound") && Catch::Matchers::Contains("t = 13.38"));
+    CHECK(mentions(r.warnings, "in a model without geometric stiffening"));
+    REQUIRE(r.nonlinear);
+    CHECK(r.nonlinear->table.rows() == 1339);  // 0 .. 13.38 s: written up to where it left
+    CHECK(std::string(to_string(r.status)) == "out_of_range");
+  }
+}
+
+TEST_CASE("a shipped motion far from its range draws no range warning", "[app]") {
+  // the paper's force pulse translates the beam (no spin), tiny deflections
+  const Design d = parse_design(shipped("paper_force_pulse"), "paper_force_pulse.toml");
+  const SimulationStudyResult r = run_simulation_study(d);
+  INFO(r.message);
+  CHECK(r.ok());
+  CHECK(r.warnings.empty());
+  REQUIRE(r.nonlinear);
+  CHECK(r.nonlinear->range.spin_ratio < 1e-6);  // rotation held at zero to ~atol
+  CHECK(r.nonlinear->range.deflection_ratio < 0.1);
+  // its full model runs in modal variables: no energy balance (their steps alias the power)
+  CHECK_FALSE(r.nonlinear->range.energy_balance_error_rel);
+}
