@@ -4,7 +4,8 @@
 //    1e-8, atol 1e-10: the full model and the first-order model under the prescribed motion.
 //  * BM_free: a free body (the paper's beam, NOA 6) under the paper's force and moment
 //    pulses to 3 s, full model, with and without stiffening: what the rank-four mass
-//    update and the extra terms cost per right-hand side and per run.
+//    update and the extra terms cost per right-hand side and per run; and with and
+//    without the work quadrature of the energy balance (SimulationOptions::energy_balance).
 // Reports wall time per simulation and the right-hand-side evaluation count.
 //   cmake -S . -B build-bench -DFREEFLEX_BUILD_BENCHMARKS=ON && cmake --build build-bench
 //   build-bench/bench/bench_spinup
@@ -51,13 +52,14 @@ void BM_spinup(benchmark::State& state) {
 BENCHMARK(BM_spinup)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_free(benchmark::State& state) {
-  const bool moment = state.range(0) == 1, stiffening = state.range(1) == 1;
+  const bool moment = state.range(0) == 1, stiffening = state.range(1) == 1, balance = state.range(2) == 1;
   const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
   const ForceElement e = moment ? ForceElement{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}
                                 : ForceElement{"Fy", ForceElement::Type::Force, 0.5, {0.0, 1.0}, false};
   const FlexibleBody body(beam, 6, {e}, {}, stiffening);
   const Excitation ex{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0})}};
-  const SimulationOptions o = options(3.0);
+  SimulationOptions o = options(3.0);
+  o.energy_balance = balance;
   SimulationResult r;
   for (auto _ : state) {
     r = simulate_full(body, ex, o);
@@ -67,9 +69,17 @@ void BM_free(benchmark::State& state) {
   state.counters["steps"] = static_cast<double>(r.steps);
   state.counters["t_reached"] = r.t.size() ? r.t(r.t.size() - 1) : 0.0;
   state.SetLabel(std::string(moment ? "moment pulse" : "force pulse") + (stiffening ? ", stiffened" : ", paper model") +
+                 (balance ? ", energy balance" : "") +
                  (r.ok() ? "" : " (" + std::string(to_string(r.status)) + ")"));
 }
-BENCHMARK(BM_free)->Args({0, 0})->Args({0, 1})->Args({1, 0})->Args({1, 1})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_free)
+    ->Args({0, 0, 1})
+    ->Args({0, 1, 1})
+    ->Args({1, 0, 1})
+    ->Args({1, 1, 1})
+    ->Args({0, 0, 0})
+    ->Args({1, 0, 0})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "util/quintic_hermite.hpp"
+
 namespace freeflex {
 
 Eigen::Vector3d ZeroOrderModel::acceleration(const Eigen::Ref<const Eigen::VectorXd>& x0,
@@ -66,26 +68,16 @@ RigidState SampledRigidTrajectory::at(const Instant& when) const {
   const double h = pc.t[i + 1] - pc.t[i], s = (t - pc.t[i]) / h;
   const RigidState& a = pc.samples[i];
   const RigidState& b = pc.samples[i + 1];
-  // Quintic Hermite basis on s in [0, 1] and its first two derivatives in s.
-  const double s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
-  const double H[6] = {1 - 10 * s3 + 15 * s4 - 6 * s5, s - 6 * s3 + 8 * s4 - 3 * s5,
-                       0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5, 10 * s3 - 15 * s4 + 6 * s5,
-                       -4 * s3 + 7 * s4 - 3 * s5, 0.5 * s3 - s4 + 0.5 * s5};
-  const double D1[6] = {-30 * s2 + 60 * s3 - 30 * s4, 1 - 18 * s2 + 32 * s3 - 15 * s4,
-                        s - 4.5 * s2 + 6 * s3 - 2.5 * s4, 30 * s2 - 60 * s3 + 30 * s4,
-                        -12 * s2 + 28 * s3 - 15 * s4, 1.5 * s2 - 4 * s3 + 2.5 * s4};
-  const double D2[6] = {-60 * s + 180 * s2 - 120 * s3, -36 * s + 96 * s2 - 60 * s3,
-                        1 - 9 * s + 18 * s2 - 10 * s3, 60 * s - 180 * s2 + 120 * s3,
-                        -24 * s + 84 * s2 - 60 * s3, 3 * s - 12 * s2 + 10 * s3};
-  auto combine = [&](const double* w) {
-    return (w[0] * a.pos + w[1] * h * a.vel + w[2] * h * h * a.acc + w[3] * b.pos + w[4] * h * b.vel +
-            w[5] * h * h * b.acc)
+  const detail::QuinticHermite w(s);  // basis on s in [0, 1] and its first two derivatives in s
+  auto combine = [&](const double* c) {
+    return (c[0] * a.pos + c[1] * h * a.vel + c[2] * h * h * a.acc + c[3] * b.pos + c[4] * h * b.vel +
+            c[5] * h * h * b.acc)
         .eval();
   };
   RigidState r;
-  r.pos = combine(H);
-  r.vel = combine(D1) / h;
-  r.acc = combine(D2) / (h * h);
+  r.pos = combine(w.H);
+  r.vel = combine(w.D1) / h;
+  r.acc = combine(w.D2) / (h * h);
   return r;
 }
 

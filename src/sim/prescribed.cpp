@@ -10,6 +10,7 @@
 #include "model/commands.hpp"
 #include "sim/range_check.hpp"
 #include "util/format.hpp"
+#include "util/quintic_hermite.hpp"
 
 namespace freeflex {
 namespace {
@@ -70,22 +71,12 @@ Eigen::Vector3d MotionProfile::at(double t) const {
       std::size_t i = it == t_.begin() ? 0 : static_cast<std::size_t>(it - t_.begin()) - 1;
       i = std::min(i, k - 2);
       const double h = t_[i + 1] - t_[i], s = (t - t_[i]) / h;
-      // quintic Hermite on [0, 1] (value, rate, acceleration at both ends), as SampledRigidTrajectory
-      const double s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
-      const double H[6] = {1 - 10 * s3 + 15 * s4 - 6 * s5, s - 6 * s3 + 8 * s4 - 3 * s5,
-                           0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5, 10 * s3 - 15 * s4 + 6 * s5,
-                           -4 * s3 + 7 * s4 - 3 * s5, 0.5 * s3 - s4 + 0.5 * s5};
-      const double D1[6] = {-30 * s2 + 60 * s3 - 30 * s4, 1 - 18 * s2 + 32 * s3 - 15 * s4,
-                            s - 4.5 * s2 + 6 * s3 - 2.5 * s4, 30 * s2 - 60 * s3 + 30 * s4,
-                            -12 * s2 + 28 * s3 - 15 * s4, 1.5 * s2 - 4 * s3 + 2.5 * s4};
-      const double D2[6] = {-60 * s + 180 * s2 - 120 * s3, -36 * s + 96 * s2 - 60 * s3,
-                            1 - 9 * s + 18 * s2 - 10 * s3, 60 * s - 180 * s2 + 120 * s3,
-                            -24 * s + 84 * s2 - 60 * s3, 3 * s - 12 * s2 + 10 * s3};
-      auto combine = [&](const double* w) {
-        return w[0] * v_[i] + w[1] * h * r_[i] + w[2] * h * h * a_[i] + w[3] * v_[i + 1] + w[4] * h * r_[i + 1] +
-               w[5] * h * h * a_[i + 1];
+      const detail::QuinticHermite w(s);  // value, rate and acceleration at both ends
+      auto combine = [&](const double* c) {
+        return c[0] * v_[i] + c[1] * h * r_[i] + c[2] * h * h * a_[i] + c[3] * v_[i + 1] + c[4] * h * r_[i + 1] +
+               c[5] * h * h * a_[i + 1];
       };
-      return Eigen::Vector3d(combine(H), combine(D1) / h, combine(D2) / (h * h));
+      return Eigen::Vector3d(combine(w.H), combine(w.D1) / h, combine(w.D2) / (h * h));
     }
   }
   return Eigen::Vector3d::Zero();
@@ -173,7 +164,7 @@ SimulationResult simulate_prescribed(const FlexibleBody& body, const Excitation&
     // (the rigid rows of the residual; its q rows vanish): dE/dt for the energy balance.
     auto wd = std::make_shared<FullModel::Data>(full.create_data());
     auto uq = std::make_shared<Eigen::VectorXd>(ne);
-    sys.quadrature_dim = 1;
+    if (options.energy_balance) sys.quadrature_dim = 1;
     sys.quadrature = [&full, &body, &motion, &excitation, wd, uq, n, N](
                          const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& xq, Eigen::Ref<Eigen::VectorXd> w) {
       detail::evaluate_commands(excitation, at, *uq);

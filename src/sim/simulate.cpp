@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "dynamics/body_kernels.hpp"
 #include "model/commands.hpp"
 #include "util/format.hpp"
 #include "sim/modal_variables.hpp"
@@ -161,12 +162,15 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
   // steps span many periods of the free oscillation, which the power then aliases (3 % off
   // on the paper's force pulse), and an error test of its own would change the steps.
   auto uq = std::make_shared<Eigen::VectorXd>(ne);
-  if (options.full_variables == SimulationOptions::Variables::Physical) sys.quadrature_dim = 1;
-  sys.quadrature = [&body, &excitation, uq, N](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
-                                               Eigen::Ref<Eigen::VectorXd> w) {
+  auto Gq = std::make_shared<Eigen::VectorXd>(N);
+  if (options.energy_balance && options.full_variables == SimulationOptions::Variables::Physical)
+    sys.quadrature_dim = 1;
+  sys.quadrature = [&body, &excitation, uq, Gq, N](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                   Eigen::Ref<Eigen::VectorXd> w) {
     detail::evaluate_commands(excitation, at, *uq);
     const auto zd = x.tail(N);
-    double p = zd.dot(body.generalized_force(x(2), x.segment(3, N - 3), *uq));
+    detail::generalized_force(body, x(2), x.segment(3, N - 3), *uq, *Gq);
+    double p = zd.dot(*Gq);
     if (body.damped()) p -= zd.dot(body.damping() * zd);
     w(0) = p;
     return true;

@@ -4,38 +4,14 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
-#include <fstream>
-#include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "freeflex/analysis/free_vibration.hpp"
 #include "freeflex/model/modal_integrals.hpp"
+#include "support/reference_csv.hpp"
 
 using namespace freeflex;
-
-namespace {
-/// Rows of the reference table: gamma, mode, and the named columns.
-std::vector<std::map<std::string, double>> read_rows(const std::string& name) {
-  std::ifstream in(std::string(FREEFLEX_SOURCE_DIR) + "/tests/reference/" + name);
-  REQUIRE(in);
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> header;
-  std::stringstream hs(line);
-  for (std::string c; std::getline(hs, c, ',');) header.push_back(c);
-  std::vector<std::map<std::string, double>> rows;
-  while (std::getline(in, line)) {
-    std::stringstream ls(line);
-    std::map<std::string, double> row;
-    std::string c;
-    for (std::size_t i = 0; i < header.size() && std::getline(ls, c, ','); ++i) row[header[i]] = std::stod(c);
-    rows.push_back(row);
-  }
-  return rows;
-}
-}  // namespace
 
 TEST_CASE("rotating cantilever: the first three in-plane frequencies at gamma = 0, 1, 2, 5, 10", "[analysis]") {
   // L = 1 m, rho A = 1 kg/m, EI = 1 N m^2 clamped at o = its root: gamma = Omega, omega_bar = omega.
@@ -46,7 +22,7 @@ TEST_CASE("rotating cantilever: the first three in-plane frequencies at gamma = 
   const int noa = 12;
   const ModalIntegrals mi = stiffened_modal_integrals(beam, make_basis(beam, noa));
   double worst = 0.0, worst_plain = 0.0;
-  for (const auto& row : read_rows("rotating_cantilever_frequencies.csv")) {
+  for (const auto& row : freeflex_test::reference_rows("rotating_cantilever_frequencies.csv")) {
     const double gamma = row.at("gamma");
     const int k = static_cast<int>(row.at("mode"));
     const Eigen::VectorXd with = spinning_frequencies_squared(mi, gamma, true);

@@ -33,7 +33,7 @@ std::string edited(std::string text, const std::string& from, const std::string&
 }
 }  // namespace
 
-TEST_CASE("the KRB spin-up: stiffened ok; without stiffening a warning and out_of_range", "[app]") {
+TEST_CASE("the KRB spin-up: stiffened ok, without stiffening a warning and out_of_range", "[app]") {
   const std::string text = shipped("spinup_krb");
   {
     const Design d = parse_design(edited(text, "compare_stiffening = true", "compare_stiffening = false"), "krb.toml");

@@ -7,6 +7,7 @@
 #include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/dynamics/full_model.hpp"
 #include "support/bodies.hpp"
+#include "support/fixed_trajectory.hpp"
 
 using namespace freeflex;
 
@@ -18,18 +19,7 @@ FlexibleBody rich_body(int noa, std::vector<double> damping = {}, bool stiffenin
                       stiffening);
 }
 
-/// A fixed rigid state returned at every instant: the linearization point.
-class FixedTrajectory : public RigidTrajectory {
- public:
-  explicit FixedTrajectory(RigidState s) : s_(s) {}
-  RigidState at(const Instant&) const override { return s_; }
-  double t_begin() const override { return 0.0; }
-  double t_end() const override { return 1.0; }
-  std::vector<double> breakpoints() const override { return {}; }
-
- private:
-  RigidState s_;
-};
+using freeflex_test::FixedTrajectory;
 
 double max_rel(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).cwiseAbs().maxCoeff() / std::max(1e-300, b.cwiseAbs().maxCoeff());

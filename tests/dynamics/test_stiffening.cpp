@@ -11,6 +11,7 @@
 #include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/dynamics/full_model.hpp"
 #include "support/bodies.hpp"
+#include "support/fixed_trajectory.hpp"
 
 using namespace freeflex;
 
@@ -239,22 +240,8 @@ TEST_CASE("stiffened invariants: Noether's momenta of eq. 13.4", "[dynamics]") {
   }
 }
 
-namespace {
-/// A fixed rigid state at every instant.
-class FixedMotion : public RigidTrajectory {
- public:
-  explicit FixedMotion(RigidState s) : s_(s) {}
-  RigidState at(const Instant&) const override { return s_; }
-  double t_begin() const override { return 0.0; }
-  double t_end() const override { return 1.0; }
-  std::vector<double> breakpoints() const override { return {}; }
 
- private:
-  RigidState s_;
-};
-}  // namespace
-
-TEST_CASE("prescribed motion: the q rows of the full model; first order gives the same equation", "[dynamics]") {
+TEST_CASE("prescribed motion: the q rows of the full model, and first order gives the same equation", "[dynamics]") {
   // Under prescribed (R, θ) the q equation of the second-order T is linear in q (eq. 13.10):
   // the full model's and the first-order model's right-hand sides are the same, except
   // for a thruster that follows the slope (its direction depends on q): left out here.
@@ -288,7 +275,7 @@ TEST_CASE("prescribed motion: the q rows of the full model; first order gives th
     CHECK(r.tail(n).cwiseAbs().maxCoeff() < 1e-12 * scale);  // round-off of the largest terms
     CHECK((full.constraint_force(z, zd, zdd, u) - r.head<3>()).cwiseAbs().maxCoeff() == 0.0);
     // the first-order model about the same motion, R1 = θ1 = 0
-    const FixedMotion motion(s);
+    const freeflex_test::FixedTrajectory motion(s);
     const FirstOrderModel fo(body, motion, [&](const Instant&, Eigen::Ref<Eigen::VectorXd> c) { c = u; }, {});
     FirstOrderModel::Data od = fo.create_data();
     const Eigen::VectorXd& lin = fo.prescribed_rhs(od, Instant::at(0.0), xq, Eigen::VectorXd());

@@ -5,35 +5,15 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
-#include <fstream>
-#include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "freeflex/sim/prescribed.hpp"
+#include "support/reference_csv.hpp"
 
 using namespace freeflex;
 
 namespace {
-
-/// Columns of a reference CSV by name.
-std::map<std::string, std::vector<double>> read_csv(const std::string& name) {
-  std::ifstream in(std::string(FREEFLEX_SOURCE_DIR) + "/tests/reference/" + name);
-  REQUIRE(in);
-  std::string line;
-  std::getline(in, line);
-  std::vector<std::string> header;
-  std::stringstream hs(line);
-  for (std::string c; std::getline(hs, c, ',');) header.push_back(c);
-  std::map<std::string, std::vector<double>> cols;
-  while (std::getline(in, line)) {
-    std::stringstream ls(line);
-    std::string c;
-    for (std::size_t i = 0; i < header.size() && std::getline(ls, c, ','); ++i) cols[header[i]].push_back(std::stod(c));
-  }
-  return cols;
-}
 
 /// The KRB cantilever: L = 10 m, ρA = 1.2 kg/m, EI = 14 000 N m², clamped at o = its root.
 FlexibleBody krb_body(int noa, bool stiffening) {
@@ -95,7 +75,7 @@ TEST_CASE("a hub of radius r carries o around its centre", "[sim][prescribed]") 
 }
 
 TEST_CASE("KRB spin-up with stiffening: bounded, within 2 % of the peak of the reference", "[sim][prescribed]") {
-  const auto ref = read_csv("krb_spinup_nonlinear.csv");
+  const auto ref = freeflex_test::reference_columns("krb_spinup_nonlinear.csv");
   const double rate = GENERATE(4.0, 6.0);
   const std::string col = rate == 4.0 ? "tip_v_os4_m" : "tip_v_os6_m";
   const FlexibleBody body = krb_body(6, true);
@@ -138,7 +118,7 @@ TEST_CASE("KRB spin-up with stiffening: bounded, within 2 % of the peak of the r
 
 TEST_CASE("KRB spin-up without stiffening diverges and ends out of range", "[sim][prescribed]") {
   const double rate = GENERATE(4.0, 6.0);
-  const auto lin_ref = read_csv(rate == 4.0 ? "krb_spinup_linear_os4.csv" : "krb_spinup_linear_os6.csv");
+  const auto lin_ref = freeflex_test::reference_columns(rate == 4.0 ? "krb_spinup_linear_os4.csv" : "krb_spinup_linear_os6.csv");
   const FlexibleBody body = krb_body(6, false);
   const PrescribedMotion motion({}, {}, MotionProfile::spin_up(rate, 15.0));
   for (bool first_order : {false, true}) {

@@ -33,6 +33,10 @@ struct SimulationOptions {
   /// the beam exceeds this fraction of the beam's length (an inextensible beam cannot bend
   /// further than its length: the response has grown without bound). Checked at output times.
   double max_deflection_ratio = 1.0;
+  /// Integrate the work done on the body along the full model's solution (SimulationResult::
+  /// work_J, the energy balance of the range report). It leaves the states unchanged and
+  /// costs one load evaluation per step.
+  bool energy_balance = true;
 };
 
 /// Every setting out of range, those of `integrator` as "integrator.rtol"; empty when valid.
