@@ -31,6 +31,7 @@ SimulationOptions options(double duration) {
   o.output_step_s = 0.01;
   o.integrator.rtol = 1e-8;
   o.integrator.atol = 1e-10;
+  o.energy_balance = true;  // as freeflex run does (BM_free switches it)
   return o;
 }
 

@@ -25,6 +25,7 @@
 
 #include "freeflex/sim/integrator.hpp"
 #include "freeflex/sim/maneuver.hpp"
+#include "freeflex/sim/prescribed.hpp"
 #include "freeflex/sim/simulate.hpp"
 
 #include "freeflex/trajopt/collocation.hpp"

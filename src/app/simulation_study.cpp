@@ -208,6 +208,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     ProgressReport progress(log, st.options.duration_s);
     SimulationOptions o = st.options;
     o.integrator.progress = progress.callback();
+    o.energy_balance = true;  // the range report's energy balance (full model)
     SimulationStudyResult::Solution s;
     s.run = motion ? simulate_prescribed(body, ex, *motion, o, false) : simulate_full(body, ex, o);
     const SimulationResult& nl = s.run;
@@ -243,6 +244,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     ProgressReport progress(log, st.options.duration_s);
     SimulationOptions o = st.options;
     o.integrator.progress = progress.callback();
+    o.energy_balance = true;  // the range report's energy balance (full model)
     SimulationStudyResult::Solution s;
     s.run = motion ? simulate_prescribed(other, ex, *motion, o, false) : simulate_full(other, ex, o);
     if (log) *log << progress.resume() << to_string(s.run.status) << " (" << s.run.steps << " steps)\n";
@@ -262,6 +264,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     ProgressReport progress(log, st.options.duration_s);
     SimulationOptions o = st.options;
     o.integrator.progress = progress.callback();
+    o.energy_balance = true;  // the range report's energy balance (full model)
     SimulationStudyResult::Solution s;
     if (motion) {
       s.run = simulate_prescribed(body, ex, *motion, o, true);

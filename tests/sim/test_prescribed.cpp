@@ -29,6 +29,7 @@ SimulationOptions krb_options() {
   o.output_step_s = 0.01;
   o.integrator.rtol = 1e-8;
   o.integrator.atol = 1e-10;
+  o.energy_balance = true;
   return o;
 }
 

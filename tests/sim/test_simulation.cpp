@@ -186,6 +186,7 @@ TEST_CASE("full model conserves energy and momenta after the loads end", "[sim]"
   // Stiffened: the momenta drift 1.1e-8 / 1.6e-8 at atol 1e-12 (integration error: 7e-9 /
   // 1.1e-8 at 1e-13, 1.8e-9 / 2.5e-9 at 1e-14, energy 8.5e-10); rtol stays the 1e-10.
   if (stiffening) opt.integrator.atol = 1e-14;
+  opt.energy_balance = true;
   const SimulationResult r = simulate_full(body, ex, opt);
   REQUIRE(r.ok());
   const FullModel model(body);
