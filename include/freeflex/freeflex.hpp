@@ -28,6 +28,8 @@
 #include "freeflex/sim/simulate.hpp"
 
 #include "freeflex/trajopt/collocation.hpp"
+#include "freeflex/trajopt/elastic_dynamics.hpp"
+#include "freeflex/trajopt/maneuver_dynamics.hpp"
 #include "freeflex/trajopt/problem.hpp"
 #include "freeflex/trajopt/replay.hpp"
 #include "freeflex/trajopt/rigid_dynamics.hpp"

@@ -77,8 +77,25 @@ std::vector<FieldProblem> problems(const ManeuverProblem& p, int ne) {
   for (const auto& w : weights)
     if (!(w.second >= 0.0) || !std::isfinite(w.second))
       err.push_back(w.first, std::string(w.first) + " = " + num(w.second) + ", expected a finite value >= 0");
-  if (!(p.w_energy > 0.0 || p.w_time > 0.0 || p.w_smooth > 0.0))
-    err.push_back("w_energy", "w_energy, w_time and w_smooth are all 0, expected at least one > 0");
+  if (!(p.w_vibration >= 0.0) || !std::isfinite(p.w_vibration))
+    err.push_back("w_vibration", "w_vibration = " + num(p.w_vibration) + ", expected a finite value >= 0");
+  if (!(p.w_energy > 0.0 || p.w_time > 0.0 || p.w_smooth > 0.0 || p.w_vibration > 0.0))
+    err.push_back("w_energy", "w_energy, w_time, w_smooth and w_vibration are all 0, expected at least one > 0");
+  if (p.modes_at_rest < ManeuverProblem::all_modes)
+    err.push_back("modes_at_rest", "modes_at_rest = " + std::to_string(p.modes_at_rest) +
+                  ", expected >= 0 or all_modes (-1)");
+  if (!(p.tip_deflection_limit_m > 0.0))
+    err.push_back("tip_deflection_limit_m", "tip_deflection_limit_m = " + num(p.tip_deflection_limit_m) +
+                  ", expected > 0 (infinity for no bound)");
+  if (!p.elastic) {
+    if (p.modes_at_rest != 0)
+      err.push_back("modes_at_rest", "modes_at_rest = " + std::to_string(p.modes_at_rest) + " needs elastic = true");
+    if (p.w_vibration != 0.0)
+      err.push_back("w_vibration", "w_vibration = " + num(p.w_vibration) + " needs elastic = true");
+    if (p.tip_deflection_limit_m != ManeuverProblem::inf)
+      err.push_back("tip_deflection_limit_m",
+                    "tip_deflection_limit_m = " + num(p.tip_deflection_limit_m) + " needs elastic = true");
+  }
   if (p.w_time > 0.0 && !p.free_time)
     err.push_back("w_time", "w_time = " + num(p.w_time) + " with a fixed duration, expected free_time = true");
   if (p.energy_weights.size() != 0 && check_size(p.energy_weights, "energy_weights"))
@@ -111,7 +128,12 @@ std::vector<FieldProblem> problems(const TrajoptOptions& o) {
 }
 
 void validate(const FlexibleBody& body, const ManeuverProblem& problem) {
-  throw_if_any("maneuver problem", problems(problem, static_cast<int>(body.elements().size())));
+  std::vector<FieldProblem> list = problems(problem, static_cast<int>(body.elements().size()));
+  if (problem.elastic && problem.modes_at_rest > body.n())
+    list.push_back({"modes_at_rest", "modes_at_rest = " + std::to_string(problem.modes_at_rest) +
+                                         ", expected at most the " + std::to_string(body.n()) +
+                                         " elastic coordinates of the body"});
+  throw_if_any("maneuver problem", list);
 }
 
 void validate(const TrajoptOptions& options) { throw_if_any("trajopt options", problems(options)); }

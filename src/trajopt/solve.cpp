@@ -67,12 +67,13 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
       res.trajectory = nlp.trajectory(w);
       res.max_error_estimate = res.trajectory->interval_errors().maxCoeff();
       res.t = res.trajectory->knot_times();
-      res.x = res.trajectory->knot_states();
+      res.x = res.trajectory->knot_states().leftCols<6>();
+      res.x_elastic = res.trajectory->knot_states().rightCols(nlp.state_size() - 6);
       res.u = res.trajectory->knot_controls();
       const int N = nlp.intervals(), nu = nlp.dynamics().nu();
       if (has_midpoints(options.transcription)) {
         CollocationNlp::Midpoints mid = nlp.midpoints(w);
-        res.x_mid = std::move(mid.x);
+        res.x_mid = mid.x.leftCols<6>();
         res.u_mid = std::move(mid.u);
         res.t_mid.resize(N);
         for (int k = 0; k < N; ++k) res.t_mid(k) = nlp.mid_fraction(k) * res.duration_s;

@@ -70,9 +70,12 @@ struct TrajoptResult {
   std::vector<MeshRound> rounds;    ///< first solve, then each refinement
 
   Eigen::VectorXd t;      ///< N+1 knot times [s]
-  Eigen::MatrixXd x;      ///< (N+1) x 6 knot states
+  Eigen::MatrixXd x;      ///< (N+1) x 6 knot states (rigid part)
+  /// (N+1) x (4 + 2n) elastic knot states x1 (trajopt/elastic_dynamics.hpp); 0 columns
+  /// without problem.elastic.
+  Eigen::MatrixXd x_elastic;
   Eigen::MatrixXd u;      ///< (N+1) x nu knot controls
-  Eigen::VectorXd t_mid;  ///< Hermite–Simpson only: N midpoint times, states, controls
+  Eigen::VectorXd t_mid;  ///< Hermite–Simpson only: N midpoint times, rigid states, controls
   Eigen::MatrixXd x_mid;
   Eigen::MatrixXd u_mid;
 
