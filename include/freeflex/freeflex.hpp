@@ -27,6 +27,7 @@
 #include "freeflex/sim/maneuver.hpp"
 #include "freeflex/sim/simulate.hpp"
 
+#include "freeflex/trajopt/chattering.hpp"
 #include "freeflex/trajopt/collocation.hpp"
 #include "freeflex/trajopt/elastic_dynamics.hpp"
 #include "freeflex/trajopt/maneuver_dynamics.hpp"
