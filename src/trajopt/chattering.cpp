@@ -83,9 +83,9 @@ ChatteringReport detect_chattering(const TrajoptResult& r, const ManeuverProblem
   rep.suggested_smooth_weight = 0.02 * scale / sum;
   std::ostringstream rem;
   rem << "add a smoothness weight (objective = \"weighted\", smooth_weight = " << rep.suggested_smooth_weight
-      << ") or rate limits (rate_limits = [";
+      << "); rate limits (rate_limits = [";
   for (int a = 0; a < nu; ++a) rem << (a ? ", " : "") << rep.suggested_rate_limit(a);
-  rem << "] per second)";
+  rem << "] per second) bound the chatter's amplitude but need not remove it";
   rep.remedy = rem.str();
   return rep;
 }

@@ -35,9 +35,11 @@ struct ChatteringReport {
   std::vector<int> actuators;    ///< indices into problem.actuators, flagged ones
   std::vector<int> longest_run;  ///< per actuator: longest alternation run found
   std::vector<double> run_begin_s, run_end_s;  ///< per actuator: its time span (0, 0 if none)
-  /// Suggested remedies (either clears the flag): a smoothness weight w_smooth that costs
+  /// Suggested remedies: a smoothness weight w_smooth (clears the flag) that costs
   /// about 2% of the objective for a control with one full-range change per tenth of
-  /// the duration, and a rate limit (per actuator) of one full-range change in T/20.
+  /// the duration; and a rate limit (per actuator) of one full-range change in T/20, which
+  /// bounds the chatter's amplitude (on the slew: ±0.1 N instead of ±1 N) but need not
+  /// remove it.
   double suggested_smooth_weight = 0.0;
   Eigen::VectorXd suggested_rate_limit;
   std::string remedy;  ///< the two suggestions in words (empty when not flagged)
