@@ -63,6 +63,11 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
   }
   r.status = StudyStatus::Ok;
   r.flown = flown_maneuver(t, st.problem);
+  r.chattering = detect_chattering(t, st.problem);
+  if (r.chattering.flagged) {
+    r.warnings.push_back("maneuver: " + r.chattering.message + "; " + r.chattering.remedy);
+    if (study_log.warn) study_log.warn(r.warnings.back());
+  }
   return r;
 }
 
@@ -113,6 +118,25 @@ Json to_json(const ManeuverStudyResult& r) {
   j["max_defect"] = t.max_defect;
   j["transcription"] = to_string(t.transcription);
   j["intervals"] = t.intervals;
+  if (r.ok()) {
+    Json c = Json::object();
+    c["flagged"] = r.chattering.flagged;
+    c["message"] = r.chattering.message;
+    if (r.chattering.flagged) {
+      c["remedy"] = r.chattering.remedy;
+      c["suggested_smooth_weight"] = r.chattering.suggested_smooth_weight;
+      c["suggested_rate_limits"] = std::vector<double>(r.chattering.suggested_rate_limit.data(),
+                                                       r.chattering.suggested_rate_limit.data() +
+                                                           r.chattering.suggested_rate_limit.size());
+    }
+    j["chattering"] = c;
+  }
+  if (t.x_elastic.cols() > 0) {
+    Json e = Json::object();
+    e["terminal_vibration_energy_J"] = t.terminal_vibration_energy_J;  // the optimizer's first-order model
+    e["peak_tip_deflection_m"] = t.peak_tip_deflection_m;              // at the collocation points
+    j["elastic"] = e;
+  }
   return j;
 }
 

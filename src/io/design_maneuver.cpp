@@ -95,6 +95,18 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   };
   per_actuator("actuator_weights", kWeight, p.energy_weights);
   per_actuator("rate_limits", kCommand, p.du_max);
+  // The elastic modes inside the problem (first-order model about the rigid motion).
+  p.elastic = m.boolean("elastic", false).value_or(false);
+  p.modes_at_rest = static_cast<int>(
+      m.integer_or_word("modes_at_rest", 0, kMaxNoa, "all", ManeuverProblem::all_modes, false).value_or(0));
+  p.w_vibration = m.number("vibration_weight", kWeight, false).value_or(0.0);
+  p.tip_deflection_limit_m =
+      m.number("tip_deflection_limit_m", Range::positive().supported(0.0, lim::kMaxPosition_m), false)
+          .value_or(ManeuverProblem::inf);
+  if (p.elastic && p.modes_at_rest > d.noa && d.noa > 0)
+    m.problem("modes_at_rest", m.key_path("modes_at_rest") + " = " + std::to_string(p.modes_at_rest) +
+                                   ", must be at most model.noa = " + std::to_string(d.noa) +
+                                   " (the elastic coordinates) or \"all\"");
   // What the library checks itself (bounds in order, weights, time weight and a free
   // duration, sizes per actuator) is reported at the keys that set it.
   FieldKeys keys{{"t_min_s", "duration_min_s"}, {"t_max_s", "duration_max_s"}, {"free_time", "free_duration"}};
@@ -102,6 +114,9 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   if (objective == "weighted")
     keys.insert(keys.end(), {{"w_energy", "energy_weight"}, {"w_time", "time_weight"}, {"w_smooth", "smooth_weight"}});
   if (names_ok) keys.insert(keys.end(), {{"energy_weights", "actuator_weights"}, {"du_max", "rate_limits"}});
+  keys.insert(keys.end(), {{"modes_at_rest", "modes_at_rest"},
+                           {"w_vibration", "vibration_weight"},
+                           {"tip_deflection_limit_m", "tip_deflection_limit_m"}});
   report_field_problems(m, problems(p, static_cast<int>(d.loads.size() + d.actuators.size())), keys);
 
   o.transcription = m.enumerated<Transcription>("transcription", false).value_or(o.transcription);

@@ -177,6 +177,19 @@ std::optional<long long> Section::integer(const std::string& key, long long lo, 
   return v;
 }
 
+std::optional<long long> Section::integer_or_word(const std::string& key, long long lo, long long hi,
+                                                  const std::string& word, long long word_value, bool required) {
+  const toml::node* n = get(key);
+  if (n && n->is_string()) {
+    if (*n->value<std::string>() == word) return word_value;
+    report(key, line_of(*n),
+           key_path(key) + " = " + show(*n) + ", must be a whole number in [" + std::to_string(lo) + ", " +
+               std::to_string(hi) + "] or \"" + word + "\"");
+    return std::nullopt;
+  }
+  return integer(key, lo, hi, required);
+}
+
 std::optional<bool> Section::boolean(const std::string& key, bool required) {
   const toml::node* n = get(key);
   if (!n) {

@@ -75,6 +75,9 @@ class Section {
 
   std::optional<double> number(const std::string& key, const Range& range, bool required);
   std::optional<long long> integer(const std::string& key, long long lo, long long hi, bool required);
+  /// A whole number in [lo, hi], or the string `word` read as `word_value` ("all").
+  std::optional<long long> integer_or_word(const std::string& key, long long lo, long long hi, const std::string& word,
+                                           long long word_value, bool required);
   std::optional<bool> boolean(const std::string& key, bool required);
   /// A string; if `identifier`, only letters, digits, '_' and '-' (it names files).
   std::optional<std::string> string(const std::string& key, bool required, bool identifier = false);

@@ -2,7 +2,9 @@
 // solve per mesh, each warm-started from the interpolated solution of the last.
 #include "freeflex/trajopt/solve.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -69,6 +71,15 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
       res.t = res.trajectory->knot_times();
       res.x = res.trajectory->knot_states().leftCols<6>();
       res.x_elastic = res.trajectory->knot_states().rightCols(nlp.state_size() - 6);
+      res.terminal_vibration_energy_J = nlp.terminal_vibration_energy(w);
+      if (const ElasticDynamics* el = nlp.dynamics().elastic()) {
+        res.peak_tip_deflection_m = 0.0;
+        for (int j = 0; j < nlp.num_points(); ++j) {
+          const auto q = w.segment(nlp.point_offset(j) + 6 + el->q_index(), el->n());
+          res.peak_tip_deflection_m =
+              std::max({res.peak_tip_deflection_m, std::abs(el->phi_left().dot(q)), std::abs(el->phi_right().dot(q))});
+        }
+      }
       res.u = res.trajectory->knot_controls();
       const int N = nlp.intervals(), nu = nlp.dynamics().nu();
       if (has_midpoints(options.transcription)) {

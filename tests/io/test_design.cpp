@@ -170,8 +170,8 @@ TEST_CASE("what the maneuver library checks itself is reported at the design's k
                       "duration_min_s <= duration_max_s"));
   // a weighted objective that weights nothing (line 14)
   CHECK_THAT(problems_of(head + "duration_s = 1.0\nobjective = \"weighted\"\nenergy_weight = 0.0\n"),
-             Contains("line 14: maneuver.energy_weight, time_weight and smooth_weight are all 0, expected at least "
-                      "one > 0"));
+             Contains("line 14: maneuver.energy_weight, time_weight, smooth_weight and vibration_weight are all 0, "
+                      "expected at least one > 0"));
   // a time weight with a fixed duration (line 15)
   CHECK_THAT(problems_of(head + "duration_s = 1.0\nobjective = \"weighted\"\nfree_duration = false\n"
                                 "time_weight = 1.0\n"),

@@ -16,6 +16,7 @@
 #include "freeflex/control/switch_time.hpp"
 #include "freeflex/enum_names.hpp"
 #include "freeflex/io/design.hpp"
+#include "freeflex/trajopt/chattering.hpp"
 #include "freeflex/trajopt/solve.hpp"
 
 namespace freeflex {
@@ -78,6 +79,8 @@ struct ManeuverStudyResult {
 
   TrajoptResult trajopt;
   std::optional<FlownManeuver> flown;  ///< when solved: what [simulation] and [controller] fly
+  /// When solved: chattering of the controls (a singular arc), with suggested remedies.
+  ChatteringReport chattering;
 };
 /// `quiet`: no Ipopt log on the log stream (the design's own `quiet` applies too).
 ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const StudyLog& log = {});

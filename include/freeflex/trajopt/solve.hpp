@@ -74,6 +74,10 @@ struct TrajoptResult {
   /// (N+1) x (4 + 2n) elastic knot states x1 (trajopt/elastic_dynamics.hpp); 0 columns
   /// without problem.elastic.
   Eigen::MatrixXd x_elastic;
+  /// With problem.elastic: E_vib(T) of the optimizer's elastic state (eq. 6.8) [J] and the
+  /// largest |Φ q| at either end of the beam over the collocation points [m].
+  double terminal_vibration_energy_J = 0.0;
+  double peak_tip_deflection_m = 0.0;
   Eigen::MatrixXd u;      ///< (N+1) x nu knot controls
   Eigen::VectorXd t_mid;  ///< Hermite–Simpson only: N midpoint times, rigid states, controls
   Eigen::MatrixXd x_mid;
