@@ -97,6 +97,9 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   per_actuator("rate_limits", kCommand, p.du_max);
   // The elastic modes inside the problem (first-order model about the rigid motion).
   p.elastic = m.boolean("elastic", false).value_or(false);
+  p.zero_end_commands = m.boolean("zero_end_commands", false).value_or(false);
+  p.elastic_modes = static_cast<int>(
+      m.integer_or_word("elastic_modes", 1, kMaxNoa, "all", ManeuverProblem::all_modes, false).value_or(-1));
   p.modes_at_rest = static_cast<int>(
       m.integer_or_word("modes_at_rest", 0, kMaxNoa, "all", ManeuverProblem::all_modes, false).value_or(0));
   p.w_vibration = m.number("vibration_weight", kWeight, false).value_or(0.0);
@@ -115,6 +118,7 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
     keys.insert(keys.end(), {{"w_energy", "energy_weight"}, {"w_time", "time_weight"}, {"w_smooth", "smooth_weight"}});
   if (names_ok) keys.insert(keys.end(), {{"energy_weights", "actuator_weights"}, {"du_max", "rate_limits"}});
   keys.insert(keys.end(), {{"modes_at_rest", "modes_at_rest"},
+                           {"elastic_modes", "elastic_modes"},
                            {"w_vibration", "vibration_weight"},
                            {"tip_deflection_limit_m", "tip_deflection_limit_m"}});
   report_field_problems(m, problems(p, static_cast<int>(d.loads.size() + d.actuators.size())), keys);

@@ -22,7 +22,7 @@ std::vector<double> uniform_mesh(int intervals) {
 ManeuverDynamics checked_dynamics(const FlexibleBody& body, const ManeuverProblem& problem) {
   validate(body, problem);
   if (!problem.elastic) return ManeuverDynamics(body, problem.actuators);
-  return ManeuverDynamics(body, problem.actuators, std::make_shared<const ElasticDynamics>(body, problem.actuators));
+  return ManeuverDynamics(body, problem.actuators, std::make_shared<const ElasticDynamics>(body, problem.actuators, problem.elastic_modes));
 }
 
 }  // namespace
@@ -186,6 +186,11 @@ CollocationNlp::Bounds CollocationNlp::bounds() const {
     wl.segment(cp.offset, nu_) = problem_.u_min;
     wu.segment(cp.offset, nu_) = problem_.u_max;
   }
+  if (problem_.zero_end_commands)
+    for (int j : {0, P_ - 1}) {
+      wl.segment(point_offset(j) + nx_, nu_).setZero();
+      wu.segment(point_offset(j) + nx_, nu_).setZero();
+    }
   if (free_time()) {
     wl(n_ - 1) = problem_.t_min_s;
     wu(n_ - 1) = problem_.t_max_s;

@@ -19,15 +19,21 @@ Eigen::Matrix2d rot(double theta) {
 
 }  // namespace
 
-ElasticDynamics::ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators)
-    : ElasticDynamics(body, std::move(actuators), Stiffening{body.integrals().H_bar, body.integrals().G_c}) {}
+ElasticDynamics::ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators, int modes)
+    : ElasticDynamics(body, std::move(actuators), Stiffening{body.integrals().H_bar, body.integrals().G_c}, modes) {}
 
-ElasticDynamics::ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators, const Stiffening& stiffening)
-    : actuators_(std::move(actuators)) {
+ElasticDynamics::ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators, const Stiffening& stiffening,
+                                 int modes)
+    : actuators_(std::move(actuators)), modes_(modes) {
   const RigidDynamics check(body, actuators_);  // the same actuator checks and messages
   n_ = body.n();
+  if (modes != all_modes && (modes < 1 || modes > n_))
+    throw std::invalid_argument("elastic dynamics: modes = " + std::to_string(modes) + ", expected 1 .. " +
+                                std::to_string(n_) + " (the body's elastic coordinates) or all_modes (-1)");
+  truncated_ = modes != all_modes;
+  m_ = truncated_ ? modes : n_;
   nu_ = static_cast<int>(actuators_.size());
-  na_ = 3 + n_;
+  na_ = 3 + m_;
   if (stiffening.H_bar.rows() != n_ || stiffening.H_bar.cols() != n_ || stiffening.G_c.rows() != n_ ||
       stiffening.G_c.cols() != n_)
     throw std::invalid_argument("elastic dynamics: stiffening H_bar and G_c must be " + std::to_string(n_) + " x " +
@@ -37,11 +43,26 @@ ElasticDynamics::ElasticDynamics(const FlexibleBody& body, std::vector<int> actu
 
 void ElasticDynamics::build(const FlexibleBody& body, const Stiffening& stiff) {
   const ModalIntegrals& mi = body.integrals();
-  const int n = n_, N = na_, nx1 = nx();
+  const int n = n_, N = 3 + n_, nr = na_, nx1 = nx();
   const double m = mi.m, S = mi.S_o, D = mi.I_o - S * S / m;
   const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
   Mb_ = body.mass_matrix(0.0, q0);  // 𝕄 at rest in body axes: constant (eq. 11.4)
-  const Eigen::LDLT<Eigen::MatrixXd> Mb_ldlt(Mb_);
+  // Elastic modes at rest, mass-normalized (eq. 4.1): 𝕄_b v is zero in its rigid rows,
+  // and its q rows give η = vᵀ 𝕄_b δz = (M_c φ)ᵀ q.
+  Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(N, N);
+  K0.bottomRightCorner(n, n) = mi.K;
+  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K0, Mb_);
+  V_ = es.eigenvectors().rightCols(n);
+  const Eigen::VectorXd omega_all = es.eigenvalues().tail(n).cwiseMax(0.0).cwiseSqrt();
+  const Eigen::MatrixXd rows_all = (Mb_ * V_).bottomRows(n).transpose();  // η = rows_all q
+  // The coordinates of x1: q itself, or the first m modes (q = B ξ, a Galerkin projection).
+  B_ = truncated_ ? Eigen::MatrixXd(V_.bottomRows(n).leftCols(m_)) : Eigen::MatrixXd::Identity(n, n);
+  Eigen::MatrixXd TN = Eigen::MatrixXd::Zero(N, nr), Tpos = Eigen::MatrixXd::Zero(1 + n, 1 + m_);
+  TN.topLeftCorner<3, 3>().setIdentity();
+  TN.bottomRightCorner(n, m_) = B_;
+  Tpos(0, 0) = 1.0;
+  Tpos.bottomRightCorner(n, m_) = B_;
+  const Eigen::LDLT<Eigen::MatrixXd> Mb_ldlt(TN.transpose() * Mb_ * TN);
   Eigen::Matrix2d J;
   J << 0, -1, 1, 0;
   const Eigen::Vector2d e1(1, 0), e2(0, 1), s0(S, 0);
@@ -129,10 +150,10 @@ void ElasticDynamics::build(const FlexibleBody& body, const Stiffening& stiff) {
     }
     // Residual of the full model on the zero-order motion: q rows only (eq. 7.2).
     r.tail(n) = G.tail(n) - Phi_bar.transpose() * a(1) - Phi_tilde.transpose() * alpha;
-    Eigen::MatrixXd KK(N, nx1);
-    KK << Kpos, Kvel;
+    Eigen::MatrixXd KK(nr, nx1);
+    KK << TN.transpose() * Kpos * Tpos, TN.transpose() * Kvel * TN;
     Eigen::MatrixXd P = Mb_ldlt.solve(KK);
-    Eigen::VectorXd c = Mb_ldlt.solve(r);
+    Eigen::VectorXd c = Mb_ldlt.solve(TN.transpose() * r);
     if (P.isZero(0.0) && c.isZero(0.0)) return;
     features_.push_back({kind, actuator});
     Ps.push_back(std::move(P));
@@ -149,11 +170,11 @@ void ElasticDynamics::build(const FlexibleBody& body, const Stiffening& stiff) {
     if (!trig[2][k].isZero(0.0)) add_feature(Kind::USin, k, &trig[2][k], Ps, cs);
   }
   const int F = static_cast<int>(features_.size());
-  P_.resize(static_cast<Eigen::Index>(F) * N, nx1);
-  c_.resize(static_cast<Eigen::Index>(F) * N);
+  P_.resize(static_cast<Eigen::Index>(F) * nr, nx1);
+  c_.resize(static_cast<Eigen::Index>(F) * nr);
   for (int i = 0; i < F; ++i) {
-    P_.middleRows(static_cast<Eigen::Index>(i) * N, N) = Ps[i];
-    c_.segment(static_cast<Eigen::Index>(i) * N, N) = cs[i];
+    P_.middleRows(static_cast<Eigen::Index>(i) * nr, nr) = Ps[i];
+    c_.segment(static_cast<Eigen::Index>(i) * nr, nr) = cs[i];
   }
 
   // Structure over p = (θ0, θ0', u): which entries can be nonzero.
@@ -183,19 +204,15 @@ void ElasticDynamics::build(const FlexibleBody& body, const Stiffening& stiff) {
   for (int i = 0; i < np(); ++i)
     if (act[i]) active_p_.push_back(i);
 
-  // Elastic modes at rest, mass-normalized (eq. 4.1): 𝕄_b v is zero in its rigid rows,
-  // and its q rows give η = vᵀ 𝕄_b δz = (M_c φ)ᵀ q.
-  Eigen::MatrixXd K0 = Eigen::MatrixXd::Zero(N, N);
-  K0.bottomRightCorner(n, n) = mi.K;
-  const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(K0, Mb_);
-  V_ = es.eigenvectors().rightCols(n);
-  omega_ = es.eigenvalues().tail(n).cwiseMax(0.0).cwiseSqrt();
-  modal_rows_ = (Mb_ * V_).bottomRows(n).transpose();
-  K_ = mi.K;
-  M_c_ = mi.M - Mb_.block(3, 0, n, 3) * Mb_.topLeftCorner<3, 3>().ldlt().solve(Mb_.block(0, 3, 3, n));
+  omega_ = omega_all.head(m_);
+  modal_rows_ = truncated_ ? Eigen::MatrixXd(Eigen::MatrixXd::Identity(m_, m_)) : rows_all;
+  const Eigen::MatrixXd M_c =
+      mi.M - Mb_.block(3, 0, n, 3) * Mb_.topLeftCorner<3, 3>().ldlt().solve(Mb_.block(0, 3, 3, n));
+  K_ = B_.transpose() * mi.K * B_;
+  M_c_ = B_.transpose() * M_c * B_;
   const Beam& beam = body.beam();
-  phi_left_ = body.basis().evaluate(beam.x_of(0.0)).phi;
-  phi_right_ = body.basis().evaluate(beam.x_of(beam.length())).phi;
+  phi_left_ = body.basis().evaluate(beam.x_of(0.0)).phi * B_;
+  phi_right_ = body.basis().evaluate(beam.x_of(beam.length())).phi * B_;
 }
 
 std::vector<int> ElasticDynamics::excited_modes(double theta) const {
@@ -208,8 +225,8 @@ std::vector<int> ElasticDynamics::excited_modes(double theta) const {
     for (int j = 0; j < n_; ++j)
       if (pmax > 0.0 && std::abs(part(j, k)) > 1e-8 * pmax) ex[j] = true;
   }
-  std::vector<int> out;
-  for (int j = 0; j < n_; ++j)
+  std::vector<int> out;  // of the modes x1 holds
+  for (int j = 0; j < m_; ++j)
     if (ex[j]) out.push_back(j);
   return out;
 }
@@ -281,7 +298,7 @@ void ElasticDynamics::calc(Data& data, double theta, double omega, const Eigen::
   const double c = theta_used_ ? std::cos(theta) : 1.0, s = theta_used_ ? std::sin(theta) : 0.0;
   data.Y.noalias() = P_ * x1;
   data.Y += c_;
-  data.f.head(n_ + 1) = x1.tail(n_ + 1);
+  data.f.head(m_ + 1) = x1.tail(m_ + 1);
   auto acc = data.f.tail(na_);
   acc.setZero();
   for (std::size_t i = 0; i < features_.size(); ++i) {
@@ -297,7 +314,7 @@ void ElasticDynamics::calc_diff(Data& data, double theta, double omega, const Ei
   const double c = theta_used_ ? std::cos(theta) : 1.0, s = theta_used_ ? std::sin(theta) : 0.0;
   data.Jx.setZero();
   data.Jp.setZero();
-  for (int i = 0; i <= n_; ++i) data.Jx(i, n_ + 3 + i) = 1.0;
+  for (int i = 0; i <= m_; ++i) data.Jx(i, m_ + 3 + i) = 1.0;
   auto Jacc = data.Jx.bottomRows(na_);
   int idx[2];
   double d[2];

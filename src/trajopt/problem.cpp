@@ -87,7 +87,21 @@ std::vector<FieldProblem> problems(const ManeuverProblem& p, int ne) {
   if (!(p.tip_deflection_limit_m > 0.0))
     err.push_back("tip_deflection_limit_m", "tip_deflection_limit_m = " + num(p.tip_deflection_limit_m) +
                   ", expected > 0 (infinity for no bound)");
+  if (p.zero_end_commands && p.u_min.size() == nu && p.u_max.size() == nu)
+    for (int k = 0; k < nu; ++k)
+      if (p.u_min(k) > 0.0 || p.u_max(k) < 0.0)
+        err.push_back(item("u_min", k), "zero_end_commands needs 0 within [u_min, u_max], got " + item("u_min", k) +
+                      " = " + num(p.u_min(k)) + ", " + item("u_max", k) + " = " + num(p.u_max(k)));
+  if (p.elastic_modes < ManeuverProblem::all_modes || p.elastic_modes == 0)
+    err.push_back("elastic_modes", "elastic_modes = " + std::to_string(p.elastic_modes) +
+                  ", expected >= 1 or all_modes (-1)");
+  else if (p.elastic_modes > 0 && p.modes_at_rest > p.elastic_modes)
+    err.push_back("modes_at_rest", "modes_at_rest = " + std::to_string(p.modes_at_rest) +
+                  ", expected at most elastic_modes = " + std::to_string(p.elastic_modes) +
+                  " (the modes the problem holds)");
   if (!p.elastic) {
+    if (p.elastic_modes != ManeuverProblem::all_modes)
+      err.push_back("elastic_modes", "elastic_modes = " + std::to_string(p.elastic_modes) + " needs elastic = true");
     if (p.modes_at_rest != 0)
       err.push_back("modes_at_rest", "modes_at_rest = " + std::to_string(p.modes_at_rest) + " needs elastic = true");
     if (p.w_vibration != 0.0)
@@ -129,6 +143,10 @@ std::vector<FieldProblem> problems(const TrajoptOptions& o) {
 
 void validate(const FlexibleBody& body, const ManeuverProblem& problem) {
   std::vector<FieldProblem> list = problems(problem, static_cast<int>(body.elements().size()));
+  if (problem.elastic && problem.elastic_modes > body.n())
+    list.push_back({"elastic_modes", "elastic_modes = " + std::to_string(problem.elastic_modes) +
+                                         ", expected at most the " + std::to_string(body.n()) +
+                                         " elastic coordinates of the body"});
   if (problem.elastic && problem.modes_at_rest > body.n())
     list.push_back({"modes_at_rest", "modes_at_rest = " + std::to_string(problem.modes_at_rest) +
                                          ", expected at most the " + std::to_string(body.n()) +

@@ -5,7 +5,9 @@
 // synthetic H_bar and G_c.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <random>
+#include <vector>
 
 #include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/dynamics/zero_order.hpp"
@@ -198,4 +200,36 @@ TEST_CASE("elastic modes at rest: frequencies, modal rows and the vibration ener
   CHECK(modal == Approx(body.vibration_energy(q, qd)).epsilon(1e-10));
   for (int i = 1; i < n; ++i) CHECK(el.mode_frequencies()(i) >= el.mode_frequencies()(i - 1));
   CHECK(el.excited_modes(0.0).size() == static_cast<std::size_t>(n));  // an off-centre thruster excites all
+}
+
+TEST_CASE("a modal truncation keeps the first m modes exactly at rest", "[trajopt]") {
+  // Undamped (the truncation's modes are those of K and 𝕄_b at rest); at θ0' = 0, u = 0
+  // the free motion of x1 is the elastic modes': Jx's eigenvalues are ±i ω_j.
+  const FlexibleBody body(Beam(freeflex_test::rich_beam()), 4, freeflex_test::rich_elements());
+  const ElasticDynamics full(body, {3, 2});
+  const int n = body.n();
+  for (int m : {1, 3, n}) {
+    const ElasticDynamics el(body, {3, 2}, m);
+    REQUIRE(el.n() == m);
+    REQUIRE(el.truncated());
+    ElasticDynamics::Data d = el.create_data();
+    el.calc_diff(d, 0.3, 0.0, Eigen::Vector2d::Zero(), Eigen::VectorXd::Zero(el.nx()));
+    Eigen::EigenSolver<Eigen::MatrixXd> es(d.Jx);
+    std::vector<double> w;
+    for (int i = 0; i < es.eigenvalues().size(); ++i)
+      if (es.eigenvalues()(i).imag() > 1e-6) w.push_back(es.eigenvalues()(i).imag());
+    std::sort(w.begin(), w.end());
+    REQUIRE(w.size() == static_cast<std::size_t>(m));
+    for (int j = 0; j < m; ++j) {
+      // the full model's generalized eigenproblem against the truncated Jx (~1e-12 measured)
+      CHECK(w[static_cast<std::size_t>(j)] == Approx(full.mode_frequencies()(j)).epsilon(1e-9));
+      CHECK(el.mode_frequencies()(j) == Approx(full.mode_frequencies()(j)).epsilon(1e-12));  // the same modes
+    }
+    // tip deflections through the basis: Φ B ξ equals Φ q with q = B ξ
+    const Eigen::VectorXd xi = Eigen::VectorXd::LinSpaced(m, 0.1, 0.7);
+    const Eigen::VectorXd q = el.basis() * xi;
+    CHECK(el.phi_right().dot(xi) == Approx(full.phi_right().dot(q)).epsilon(1e-12));  // rounding only
+  }
+  CHECK_THROWS_WITH(ElasticDynamics(body, {3, 2}, 0), Catch::Contains("modes = 0"));
+  CHECK_THROWS_WITH(ElasticDynamics(body, {3, 2}, n + 1), Catch::Contains("expected 1 .. " + std::to_string(n)));
 }

@@ -4,7 +4,9 @@
 // zero-order motion, written with the rigid perturbation in body axes so that the mass
 // matrix is the constant 𝕄_b of the body at rest, and with commands u1 = 0.
 //
-//   x1 = [θ1, q (n), v1 (2), θ1', q' (n)]          4 + 2n entries
+//   x1 = [θ1, ξ (m), v1 (2), θ1', ξ' (m)]          4 + 2m entries, q = B ξ
+//   B = I (m = n, every elastic coordinate: the first-order model itself), or the first m
+//       mass-normalized elastic modes at rest (eq. 4.1), a Galerkin truncation of it
 //   v1 = C(θ0)ᵀ R1' (body components of the translational rate perturbation; R1 itself
 //        enters no equation, translation invariance, so it is not a state)
 //   x1' = [θ1'; q'; a1],   𝕄_b a1 = K_pos(p) [θ1; q] + K_vel(p) [v1; θ1'; q'] + r(p)
@@ -40,16 +42,22 @@ class ElasticDynamics {
 
   /// Throws std::invalid_argument for a bad actuator list (as RigidDynamics) or, with
   /// `stiffening`, matrices that are not n x n.
-  ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators);
-  ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators, const Stiffening& stiffening);
+  /// `modes`: m, the elastic modes kept (1 <= m <= n), or all_modes (-1: B = I, m = n).
+  static constexpr int all_modes = -1;
+  ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators, int modes = all_modes);
+  ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators, const Stiffening& stiffening,
+                  int modes = all_modes);
 
-  int n() const { return n_; }           ///< elastic coordinates
-  int nx() const { return 4 + 2 * n_; }  ///< size of x1
+  int n() const { return m_; }           ///< elastic coordinates in x1 (m)
+  int nx() const { return 4 + 2 * m_; }  ///< size of x1
+  bool truncated() const { return truncated_; }
+  /// q = basis() ξ (body n x m).
+  const Eigen::MatrixXd& basis() const { return B_; }
   int nu() const { return nu_; }
   int np() const { return 2 + nu_; }  ///< p = (θ0, θ0', u)
-  /// Index in x1 of q(0), of q'(0).
+  /// Index in x1 of ξ(0), of ξ'(0).
   int q_index() const { return 1; }
-  int q_rate_index() const { return n_ + 4; }
+  int q_rate_index() const { return m_ + 4; }
   /// Whether any coefficient depends on θ0 (inertial forces) / on θ0' (always, m > 0).
   bool depends_on_theta() const { return theta_used_; }
 
@@ -74,18 +82,19 @@ class ElasticDynamics {
   void calc_hessian(Data& data, double theta, double omega, const Eigen::Ref<const Eigen::VectorXd>& u,
                     const Eigen::Ref<const Eigen::VectorXd>& x1, const Eigen::Ref<const Eigen::VectorXd>& lambda) const;
 
-  /// The elastic modes of the body at rest (eq. 4.1 in body axes): frequencies ω_j
-  /// ascending, and the rows that give the mass-normalized modal coordinates from q,
-  /// η = modal_rows() q (η' likewise from q'). E_vib = ½ Σ (η_j'² + ω_j² η_j²), eq. 6.8.
+  /// The elastic modes of the body at rest (eq. 4.1 in body axes) that x1 can hold (m):
+  /// frequencies ω_j ascending, and the rows that give the mass-normalized modal
+  /// coordinates from ξ, η = modal_rows() ξ (η' likewise from ξ'; the identity when
+  /// truncated). E_vib = ½ Σ (η_j'² + ω_j² η_j²), eq. 6.8.
   const Eigen::VectorXd& mode_frequencies() const { return omega_; }
   const Eigen::MatrixXd& modal_rows() const { return modal_rows_; }
   /// Elastic modes that some actuator excites at attitude theta (participation |vᵀ g_k|
   /// above 1e-8 of that actuator's largest), ascending: the switch-time design's choice.
   std::vector<int> excited_modes(double theta) const;
-  /// M_c and K of eq. 6.8 (n x n).
+  /// M_c and K of eq. 6.8 in ξ (Bᵀ M_c B and Bᵀ K B, m x m).
   const Eigen::MatrixXd& condensed_mass() const { return M_c_; }
   const Eigen::MatrixXd& stiffness() const { return K_; }
-  /// Φ at the beam's two ends (1 x n each): the tip deflections are Φ q.
+  /// Φ B at the beam's two ends (1 x m each): the tip deflections are Φ q = Φ B ξ.
   const Eigen::RowVectorXd& phi_left() const { return phi_left_; }
   const Eigen::RowVectorXd& phi_right() const { return phi_right_; }
 
@@ -108,7 +117,10 @@ class ElasticDynamics {
   int second(const Feature& f, double c, double s, const Eigen::Ref<const Eigen::VectorXd>& u, int* ia, int* ib,
              double* d) const;
 
-  int n_ = 0, nu_ = 0, na_ = 0;  // na_ = 3 + n acceleration rows
+  int n_ = 0, m_ = 0, nu_ = 0, na_ = 0;  // na_ = 3 + m acceleration rows
+  int modes_ = all_modes;
+  bool truncated_ = false;
+  Eigen::MatrixXd B_;
   std::vector<int> actuators_;
   std::vector<Feature> features_;
   Eigen::MatrixXd P_;  // (F na) x nx, the P_i stacked

@@ -56,10 +56,17 @@ struct ManeuverProblem {
   double w_smooth = 0.0;
   /// Diagonal W of the energy term, one entry >= 0 per actuator; empty means all ones.
   Eigen::VectorXd energy_weights;
+  /// Commands start and end at zero (u(0) = u(T) = 0; needs 0 within [u_min, u_max]): a
+  /// command cut at T releases the quasi-static deflection of every mode, modelled or not.
+  bool zero_end_commands = false;
 
   /// Elastic modes inside the problem (docs/theory.md section 11): the state also holds
   /// the first-order elastic motion about the rigid one, from rest at t = 0.
   bool elastic = false;
+  /// With elastic: the elastic coordinates of the problem: all_modes (-1), the body's own
+  /// q (the first-order model itself); or m >= 1, its first m elastic modes at rest (a
+  /// modal truncation: modes the mesh cannot resolve are left out, docs/theory.md).
+  int elastic_modes = -1;
   /// With elastic: the first `modes_at_rest` elastic modes that the actuators excite end
   /// at rest, [ω_j η_j(T), η_j'(T)] = 0 (mass-normalized modes at rest, eq. 4.1); all_modes:
   /// every elastic mode, q(T) = q'(T) = 0; 0: none.
