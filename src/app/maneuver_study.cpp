@@ -68,6 +68,23 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     r.warnings.push_back("maneuver: " + r.chattering.message + "; " + r.chattering.remedy);
     if (study_log.warn) study_log.warn(r.warnings.back());
   }
+  if (st.problem.elastic) {
+    // The rigid optimum of the same objective: what the vibration-aware maneuver costs.
+    if (log) *log << "maneuver: rigid counterpart (no elastic part) for comparison ... " << std::flush;
+    const ManeuverProblem rigid = rigid_counterpart(st.problem);
+    TrajoptOptions ro = opt;
+    ro.verbose = false;
+    r.rigid_optimum = solve_maneuver(body, rigid, ro);
+    if (log) *log << to_string(r.rigid_optimum->status) << ", control energy " << r.rigid_optimum->control_energy
+                  << " against " << t.control_energy << '\n';
+    if (r.rigid_optimum->ok())
+      r.rigid_flown = flown_maneuver(*r.rigid_optimum, rigid);
+    else {
+      r.warnings.push_back("maneuver: the rigid counterpart did not solve (" +
+                           std::string(to_string(r.rigid_optimum->status)) + "): " + r.rigid_optimum->message);
+      if (study_log.warn) study_log.warn(r.warnings.back());
+    }
+  }
   return r;
 }
 
@@ -135,6 +152,17 @@ Json to_json(const ManeuverStudyResult& r) {
     Json e = Json::object();
     e["terminal_vibration_energy_J"] = t.terminal_vibration_energy_J;  // the optimizer's first-order model
     e["peak_tip_deflection_m"] = t.peak_tip_deflection_m;              // at the collocation points
+    e["control_energy_N2s"] = t.control_energy;  // ∫ uᵀ W u dt of the commands as flown
+    if (r.rigid_optimum) {
+      const TrajoptResult& ro = *r.rigid_optimum;
+      Json jr = Json::object();
+      jr["status"] = status_text(ro);
+      jr["objective"] = ro.objective;
+      jr["duration_s"] = ro.duration_s;
+      jr["control_energy_N2s"] = ro.control_energy;
+      e["rigid_optimum"] = jr;
+      if (ro.ok()) e["extra_control_energy_N2s"] = t.control_energy - ro.control_energy;
+    }
     j["elastic"] = e;
   }
   return j;

@@ -177,25 +177,44 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     r.message = chain.message;
     return r;
   }
-  const Excitation nominal_ex = problem.maneuver ? problem.maneuver->driving(problem.loads) : problem.loads;
-  const PerturbationResult& pert = chain.open_loop_first_order;
-  const SimulationResult& full = chain.open_loop_full;
-  r.cases.push_back({"open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
-                     element_commands(nominal_ex, ne, pert.total.t, {}, nullptr), 0.0, {}});
-  r.cases.push_back({"open_loop", "nonlinear", full.t, full.z, full.z_dot,
-                     element_commands(nominal_ex, ne, full.t, {}, nullptr), 0.0, {}});
-  if (chain.status == Status::TvlqrFailed) {
-    fail(chain.message);
-    return r;
-  }
-  for (const ClosedLoopResult* c : {&chain.closed_loop_first_order, &chain.closed_loop_full}) {
-    if (!c->ok()) {
-      fail("closed-loop simulation failed: " + c->message);
-      continue;
+  // The cases of one chain: its open loop and its closed loops, names prefixed.
+  auto add_cases = [&](const SuppressionResult& ch, const SuppressionProblem& pr, const std::string& prefix) {
+    const Excitation nominal_ex = pr.maneuver ? pr.maneuver->driving(pr.loads) : pr.loads;
+    const PerturbationResult& pert = ch.open_loop_first_order;
+    const SimulationResult& full = ch.open_loop_full;
+    r.cases.push_back({prefix + "open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
+                       element_commands(nominal_ex, ne, pert.total.t, {}, nullptr), 0.0, {}});
+    r.cases.push_back({prefix + "open_loop", "nonlinear", full.t, full.z, full.z_dot,
+                       element_commands(nominal_ex, ne, full.t, {}, nullptr), 0.0, {}});
+    if (ch.status == Status::TvlqrFailed) {
+      fail(prefix + ch.message);
+      return false;
     }
-    r.cases.push_back({"tvlqr", c == &chain.closed_loop_first_order ? "first_order" : "nonlinear", c->t, c->z,
-                       c->z_dot, element_commands(problem.loads, ne, c->t, st.actuators, &c->commands),
-                       c->saturated_fraction, {}});
+    for (const ClosedLoopResult* c : {&ch.closed_loop_first_order, &ch.closed_loop_full}) {
+      if (!c->ok()) {
+        fail(prefix + "closed-loop simulation failed: " + c->message);
+        continue;
+      }
+      r.cases.push_back({prefix + "tvlqr", c == &ch.closed_loop_first_order ? "first_order" : "nonlinear", c->t, c->z,
+                         c->z_dot, element_commands(pr.loads, ne, c->t, st.actuators, &c->commands),
+                         c->saturated_fraction, {}});
+    }
+    return true;
+  };
+  // A vibration-aware maneuver is compared with its rigid optimum, both with TV-LQR.
+  const bool vibration_aware = maneuver && maneuver->rigid_optimum;
+  if (!add_cases(chain, problem, vibration_aware ? "vibration_aware_" : "")) return r;
+  if (vibration_aware && !maneuver->rigid_flown)
+    fail("the rigid counterpart of the maneuver did not solve: no rigid_optimum rows");
+  if (vibration_aware && maneuver->rigid_flown) {
+    SuppressionProblem rp = problem;
+    rp.maneuver = maneuver->rigid_flown;
+    if (log) *log << "suppression: the rigid optimum, for comparison\n";
+    r.rigid_chain = suppress_vibration(body, rp, with_progress(options, log, report));
+    if (r.rigid_chain->status == Status::HorizonTooShort || r.rigid_chain->status == Status::OpenLoopFailed)
+      fail("rigid optimum: " + r.rigid_chain->message);
+    else
+      add_cases(*r.rigid_chain, rp, "rigid_optimum_");
   }
   if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log);
 

@@ -156,4 +156,14 @@ void validate(const FlexibleBody& body, const ManeuverProblem& problem) {
 
 void validate(const TrajoptOptions& options) { throw_if_any("trajopt options", problems(options)); }
 
+ManeuverProblem rigid_counterpart(const ManeuverProblem& problem) {
+  ManeuverProblem p = problem;
+  p.elastic = false;
+  p.elastic_modes = ManeuverProblem::all_modes;
+  p.modes_at_rest = 0;
+  p.w_vibration = 0.0;
+  p.tip_deflection_limit_m = ManeuverProblem::inf;
+  return p;
+}
+
 }  // namespace freeflex

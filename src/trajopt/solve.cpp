@@ -82,6 +82,20 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
       }
       res.u = res.trajectory->knot_controls();
       const int N = nlp.intervals(), nu = nlp.dynamics().nu();
+      // ∫ uᵀ W u dt of the commands as flown: 3-point Gauss–Legendre per interval is exact
+      // for the piecewise-quadratic (or linear) controls.
+      const Eigen::VectorXd W =
+          problem.energy_weights.size() == nu ? problem.energy_weights : Eigen::VectorXd::Ones(nu);
+      static const double gx[3] = {0.5 - 0.5 * 0.7745966692414834, 0.5, 0.5 + 0.5 * 0.7745966692414834};
+      static const double gw[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+      res.control_energy = 0.0;
+      for (int k = 0; k < N; ++k) {
+        const double ta = res.t(k), h = res.t(k + 1) - ta;
+        for (int g = 0; g < 3; ++g) {
+          const Eigen::VectorXd u = res.trajectory->control_at(Instant{ta + gx[g] * h, ta + 0.5 * h});
+          res.control_energy += gw[g] * h * u.dot(W.cwiseProduct(u));
+        }
+      }
       if (has_midpoints(options.transcription)) {
         CollocationNlp::Midpoints mid = nlp.midpoints(w);
         res.x_mid = mid.x.leftCols<6>();

@@ -81,6 +81,11 @@ struct ManeuverStudyResult {
   std::optional<FlownManeuver> flown;  ///< when solved: what [simulation] and [controller] fly
   /// When solved: chattering of the controls (a singular arc), with suggested remedies.
   ChatteringReport chattering;
+  /// With an elastic maneuver: the rigid counterpart of its problem (trajopt/problem.hpp)
+  /// solved with the same options, for the extra control energy and the suppression
+  /// comparison; and, when that solved, what it flies.
+  std::optional<TrajoptResult> rigid_optimum;
+  std::optional<FlownManeuver> rigid_flown;
 };
 /// `quiet`: no Ipopt log on the log stream (the design's own `quiet` applies too).
 ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const StudyLog& log = {});
@@ -123,6 +128,9 @@ struct SuppressionStudyResult {
   std::vector<std::string> warnings;
 
   SuppressionResult chain;  ///< nominal motion, open loop, TV-LQR, closed loops
+  /// With a vibration-aware (elastic) maneuver: the same chain about its rigid optimum
+  /// (ManeuverStudyResult::rigid_flown), compared beside it.
+  std::optional<SuppressionResult> rigid_chain;
   /// A bang-bang rotation leaving the first `modes` elastic modes at rest; without
   /// `modes`, the reason none was designed.
   struct BangBang {
@@ -131,8 +139,9 @@ struct SuppressionStudyResult {
     std::optional<SwitchTimeResult> design;
   };
   std::vector<BangBang> bang_bang;
-  /// One response compared in comparison.csv: a case (open_loop, tvlqr, bang_bang_kK) on
-  /// a model (first_order, nonlinear).
+  /// One response compared in comparison.csv: a case (open_loop, tvlqr, bang_bang_kK; with
+  /// a vibration-aware maneuver vibration_aware_open_loop, vibration_aware_tvlqr,
+  /// rigid_optimum_open_loop, rigid_optimum_tvlqr) on a model (first_order, nonlinear).
   struct Case {
     std::string name, model;
     Eigen::VectorXd t;

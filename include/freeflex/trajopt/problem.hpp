@@ -148,6 +148,10 @@ std::vector<FieldProblem> problems(const ManeuverProblem& problem, int element_c
 std::vector<FieldProblem> problems(const TrajoptOptions& options);
 /// Throws std::invalid_argument listing every problem found.
 void validate(const FlexibleBody& body, const ManeuverProblem& problem);
+/// The same problem with the elastic part taken out (elastic, modes_at_rest, vibration
+/// weight and tip bound cleared; the rest kept): its solution is the rigid optimum that a
+/// vibration-aware maneuver is compared with.
+ManeuverProblem rigid_counterpart(const ManeuverProblem& problem);
 void validate(const TrajoptOptions& options);
 
 }  // namespace freeflex

@@ -78,6 +78,9 @@ struct TrajoptResult {
   /// largest |Φ q| at either end of the beam over the collocation points [m].
   double terminal_vibration_energy_J = 0.0;
   double peak_tip_deflection_m = 0.0;
+  /// ∫ uᵀ W u dt of the returned commands (W: the problem's energy_weights), whatever the
+  /// objective; exact for the transcription's piecewise-polynomial controls.
+  double control_energy = 0.0;
   Eigen::MatrixXd u;      ///< (N+1) x nu knot controls
   Eigen::VectorXd t_mid;  ///< Hermite–Simpson only: N midpoint times, rigid states, controls
   Eigen::MatrixXd x_mid;
