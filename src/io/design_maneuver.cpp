@@ -110,6 +110,10 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
     m.problem("modes_at_rest", m.key_path("modes_at_rest") + " = " + std::to_string(p.modes_at_rest) +
                                    ", must be at most model.noa = " + std::to_string(d.noa) +
                                    " (the elastic coordinates) or \"all\"");
+  if (p.elastic && p.elastic_modes > d.noa && d.noa > 0)
+    m.problem("elastic_modes", m.key_path("elastic_modes") + " = " + std::to_string(p.elastic_modes) +
+                                   ", must be at most model.noa = " + std::to_string(d.noa) +
+                                   " (the elastic coordinates) or \"all\"");
   // What the library checks itself (bounds in order, weights, time weight and a free
   // duration, sizes per actuator) is reported at the keys that set it.
   FieldKeys keys{{"t_min_s", "duration_min_s"}, {"t_max_s", "duration_max_s"}, {"free_time", "free_duration"}};

@@ -257,3 +257,32 @@ TEST_CASE("controller keys load, bad weights, horizons and names are reported", 
              Contains("line 20: controller.actuators: \"rudder\" is not an [[actuator]] (known: 'hub')"));
 }
 
+
+TEST_CASE("elastic maneuver keys load and bad values are reported at their keys", "[io]") {
+  const std::string act = "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 2.0\n";  // 5-9
+  const std::string head = kPaperBeam + act + "[maneuver]\nactuators = [\"hub\"]\nduration_s = 1.0\n";  // 10-12
+  const Design d = parse_design(head + "elastic = true\nelastic_modes = 2\nmodes_at_rest = \"all\"\n"
+                                       "zero_end_commands = true\nvibration_weight = 3.0\ntip_deflection_limit_m = 0.05\n",
+                                "t.toml");
+  REQUIRE(d.maneuver);
+  const ManeuverProblem& p = d.maneuver->problem;
+  CHECK(p.elastic);
+  CHECK(p.elastic_modes == 2);
+  CHECK(p.modes_at_rest == ManeuverProblem::all_modes);
+  CHECK(p.zero_end_commands);
+  CHECK(p.w_vibration == 3.0);
+  CHECK(p.tip_deflection_limit_m == 0.05);
+  const Design plain = parse_design(head, "t.toml");
+  CHECK_FALSE(plain.maneuver->problem.elastic);
+  CHECK(plain.maneuver->problem.elastic_modes == ManeuverProblem::all_modes);
+  CHECK_FALSE(plain.maneuver->problem.zero_end_commands);
+  // the paper beam's model.noa is 6 (line 13 / 14)
+  CHECK_THAT(problems_of(head + "elastic = true\nelastic_modes = 7\n"),
+             Contains("line 14: maneuver.elastic_modes = 7, must be"));
+  CHECK_THAT(problems_of(head + "elastic = true\nelastic_modes = 2\nmodes_at_rest = 3\n"),
+             Contains("line 15: maneuver.modes_at_rest = 3, expected at most elastic_modes = 2"));
+  CHECK_THAT(problems_of(head + "elastic_modes = 2\n"), Contains("line 13: maneuver.elastic_modes = 2 needs elastic = true"));
+  CHECK_THAT(problems_of(head + "modes_at_rest = 1\n"), Contains("line 13: maneuver.modes_at_rest = 1 needs elastic = true"));
+  CHECK_THAT(problems_of(head + "elastic = true\ntip_deflection_limit_m = 0\n"),
+             Contains("line 14: maneuver.tip_deflection_limit_m = 0"));
+}
