@@ -64,7 +64,8 @@ Eigen::VectorXd lagrangian_gradient(const CollocationNlp& nlp, const Eigen::Vect
 /// Relative errors (max |analytic − central difference| / max |analytic|) of the
 /// objective gradient, the constraint Jacobian and the Lagrangian's Hessian at w.
 struct DerivativeErrors {
-  double gradient, jacobian, hessian;
+  double gradient, jacobian, hessian;              ///< relative
+  double gradient_abs, jacobian_abs, hessian_abs;  ///< max |analytic − central difference|
 };
 
 DerivativeErrors derivative_errors(const CollocationNlp& nlp, const Eigen::VectorXd& w, double sigma,
@@ -92,9 +93,10 @@ DerivativeErrors derivative_errors(const CollocationNlp& nlp, const Eigen::Vecto
     H(r, cc) += hv(i);
     if (r != cc) H(cc, r) += hv(i);
   }
-  return {(grad - gradfd).cwiseAbs().maxCoeff() / std::max(1e-300, grad.cwiseAbs().maxCoeff()),
-          (J - Jfd).cwiseAbs().maxCoeff() / J.cwiseAbs().maxCoeff(),
-          (H - Hfd).cwiseAbs().maxCoeff() / H.cwiseAbs().maxCoeff()};
+  const double eg = (grad - gradfd).cwiseAbs().maxCoeff(), eJ = (J - Jfd).cwiseAbs().maxCoeff(),
+               eH = (H - Hfd).cwiseAbs().maxCoeff();
+  return {eg / std::max(1e-300, grad.cwiseAbs().maxCoeff()), eJ / J.cwiseAbs().maxCoeff(), eH / H.cwiseAbs().maxCoeff(),
+          eg, eJ, eH};
 }
 
 /// The rich problem with the elastic part: modes at rest, vibration weight, tip bound.
@@ -143,32 +145,10 @@ TEST_CASE("collocation NLP derivatives match central differences", "[trajopt]") 
       }
 
       const double h = 1e-6;  // truncation ~h^2 ~1e-12, round-off ~1e-16/h ~1e-10 (entries O(1..10))
-      CollocationNlp::Data data = nlp.create_data();
-      const Eigen::VectorXd grad = nlp.objective_gradient(w);
-      const Eigen::MatrixXd J = dense_jacobian(nlp, w);
-      Eigen::MatrixXd Jfd(m, n), Hfd(n, n);
-      Eigen::VectorXd gradfd(n);
-      for (int i = 0; i < n; ++i) {
-        Eigen::VectorXd wp = w, wm = w;
-        wp(i) += h;
-        wm(i) -= h;
-        gradfd(i) = (nlp.objective(wp) - nlp.objective(wm)) / (2 * h);
-        const Eigen::VectorXd gp = nlp.constraints(data, wp);
-        const Eigen::VectorXd gm = nlp.constraints(data, wm);
-        Jfd.col(i) = (gp - gm) / (2 * h);
-        Hfd.col(i) = (lagrangian_gradient(nlp, wp, sigma, lam) - lagrangian_gradient(nlp, wm, sigma, lam)) / (2 * h);
-      }
-      CHECK((grad - gradfd).cwiseAbs().maxCoeff() < 1e-7);  // see h
-      CHECK((J - Jfd).cwiseAbs().maxCoeff() < 1e-7);        // also: FD is zero wherever the pattern has no entry
-
-      const Eigen::VectorXd hv = nlp.hessian_values(data, w, sigma, lam);
-      Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
-      for (int i = 0; i < hv.size(); ++i) {
-        const int r = nlp.hessian_rows()[i], cc = nlp.hessian_cols()[i];
-        H(r, cc) += hv(i);
-        if (r != cc) H(cc, r) += hv(i);
-      }
-      CHECK((H - Hfd).cwiseAbs().maxCoeff() < 1e-6);  // differences of analytic gradients, entries up to ~1e2
+      const DerivativeErrors e = derivative_errors(nlp, w, sigma, lam, h);
+      CHECK(e.gradient_abs < 1e-7);  // see h
+      CHECK(e.jacobian_abs < 1e-7);  // also: FD is zero wherever the pattern has no entry
+      CHECK(e.hessian_abs < 1e-6);  // differences of analytic gradients, entries up to ~1e2
     }
 }
 
@@ -207,16 +187,21 @@ TEST_CASE("elastic collocation NLP: derivatives within 1e-6 relative of central 
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   for (Transcription tr :
        {Transcription::Trapezoidal, Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed})
-    for (const auto& c : {std::make_pair(false, 2), std::make_pair(true, int(ManeuverProblem::all_modes))}) {
-      const CollocationNlp nlp(body, elastic_problem(c.first, c.second), tr, std::vector<double>{0.2, 0.5, 0.3});
-      REQUIRE(nlp.state_size() == 6 + 4 + 2 * body.n());
+    for (const auto& c : {std::make_tuple(false, 2, -1), std::make_tuple(true, int(ManeuverProblem::all_modes), -1),
+                          std::make_tuple(true, 1, 1)}) {
+      // (free time, modes at rest, elastic_modes): the last a modal truncation with zero end commands
+      ManeuverProblem p = elastic_problem(std::get<0>(c), std::get<1>(c));
+      p.elastic_modes = std::get<2>(c);
+      p.zero_end_commands = p.elastic_modes > 0;
+      const CollocationNlp nlp(body, p, tr, std::vector<double>{0.2, 0.5, 0.3});
+      REQUIRE(nlp.state_size() == 6 + 4 + 2 * (p.elastic_modes > 0 ? p.elastic_modes : body.n()));
       const int n = nlp.num_variables(), m = nlp.num_constraints();
       Eigen::VectorXd w(n), lam(m);
       for (int i = 0; i < n; ++i) w(i) = U(rng);
       for (int i = 0; i < m; ++i) lam(i) = U(rng);
       if (nlp.free_time()) w(nlp.time_index()) = 1.3;
       const DerivativeErrors e = derivative_errors(nlp, w, 0.8, lam, 1e-5);
-      INFO(to_string(tr) << " free " << c.first << ": relative errors gradient " << e.gradient << " Jacobian "
+      INFO(to_string(tr) << " free " << std::get<0>(c) << " elastic_modes " << std::get<2>(c) << ": relative errors gradient " << e.gradient << " Jacobian "
                          << e.jacobian << " Hessian " << e.hessian);
       // h = 1e-5: truncation ~h² ~1e-10 and round-off ~1e-16/h ~1e-11 of the largest entries;
       // measured up to ~1e-9
