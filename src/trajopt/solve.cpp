@@ -33,6 +33,9 @@ std::vector<double> refine(const std::vector<double>& sigma, const Eigen::Vector
 
 }  // namespace
 
+static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
+                                  const TrajoptOptions& options, std::chrono::steady_clock::time_point start);
+
 Eigen::VectorXd TrajoptResult::control_at(double t_s) const {
   if (!trajectory) return Eigen::VectorXd::Zero(u.cols());
   return trajectory->control_at(t_s);
@@ -43,6 +46,24 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
   validate(body, problem);
   validate(options);
 
+  // The separated Hermite–Simpson KKT system of the elastic problem factors in time linear
+  // in N with MUMPS' approximate minimum degree ordering, superlinear with the approximate
+  // minimum fill that suits the rest (NOA 6, N = 400 / 800: 2x / 3x slower;
+  // docs/benchmarks.md). A user's own mumps_pivot_order wins.
+  TrajoptOptions tuned;
+  const TrajoptOptions* opts = &options;
+  if (problem.elastic && options.transcription == Transcription::HermiteSimpson &&
+      std::none_of(options.ipopt_options.begin(), options.ipopt_options.end(),
+                   [](const auto& kv) { return kv.first == "mumps_pivot_order"; })) {
+    tuned = options;
+    tuned.ipopt_options.insert(tuned.ipopt_options.begin(), {"mumps_pivot_order", "0"});
+    opts = &tuned;
+  }
+  return solve_maneuver_with(body, problem, *opts, start);
+}
+
+static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
+                                  const TrajoptOptions& options, std::chrono::steady_clock::time_point start) {
   TrajoptResult res;
   res.transcription = options.transcription;
   std::vector<double> mesh(static_cast<std::size_t>(options.intervals), 1.0 / options.intervals);
