@@ -292,6 +292,7 @@ Json to_json(const Design& design, const SuppressionStudyResult& r) {
   js["horizon_s"] = design.controller->horizon_s;
   js["tvlqr_status"] = chain.law.ok() ? "ok" : chain.law.message;
   js["tvlqr_solve_time_s"] = chain.law.wall_time_s;
+  if (r.rigid_chain) js["rigid_optimum_tvlqr_status"] = r.rigid_chain->law.ok() ? "ok" : r.rigid_chain->law.message;
   if (chain.law.terminal_care) {
     js["terminal_care_residual"] = chain.law.terminal_care->residual;
     js["terminal_care_residual_normwise"] = chain.law.terminal_care->residual_normwise;
