@@ -86,6 +86,33 @@ std::vector<double> newton_switch_times(const FlexibleBody& body, double rotatio
   return out;
 }
 
+/// Rest-to-rest rotation by `rotation` at least time, |τ| <= 1 N m, the first k excited
+/// modes at rest at T; T starts at t0.
+ManeuverProblem min_time_rotation(double rotation, int k, double t0) {
+  ManeuverProblem p;
+  p.actuators = {0};
+  p.u_min = Eigen::VectorXd::Constant(1, -1.0);
+  p.u_max = Eigen::VectorXd::Constant(1, 1.0);
+  p.x_final(2) = rotation;
+  p.free_time = true;
+  p.w_energy = 0.0;
+  p.w_time = 1.0;
+  p.duration_s = t0;
+  p.t_min_s = 0.5;
+  p.t_max_s = 3.0;
+  p.elastic = true;
+  p.modes_at_rest = k;
+  return p;
+}
+
+/// Hermite-Simpson at N = 150, tight tolerance: switch times resolved within an interval.
+TrajoptOptions rotation_options() {
+  TrajoptOptions o;
+  o.intervals = 150;
+  o.tol = 1e-10;
+  return o;
+}
+
 }  // namespace
 
 TEST_CASE("minimum-time rotation with k modes at rest: the optimizer and the switch-time equations agree",
@@ -94,22 +121,8 @@ TEST_CASE("minimum-time rotation with k modes at rest: the optimizer and the swi
   const FlexibleBody body = hub_body(4);
   const double rotation = 3.0;  // rad, suppress_moment_pulse.toml's bang-bang study
   for (int k : {1, 2}) {
-    ManeuverProblem p;
-    p.actuators = {0};
-    p.u_min = Eigen::VectorXd::Constant(1, -1.0);
-    p.u_max = Eigen::VectorXd::Constant(1, 1.0);
-    p.x_final(2) = rotation;
-    p.free_time = true;
-    p.w_energy = 0.0;
-    p.w_time = 1.0;
-    p.duration_s = 1.2;
-    p.t_min_s = 0.5;
-    p.t_max_s = 3.0;
-    p.elastic = true;
-    p.modes_at_rest = k;
-    TrajoptOptions o;
-    o.intervals = 150;
-    o.tol = 1e-10;
+    const ManeuverProblem p = min_time_rotation(rotation, k, 1.2);
+    TrajoptOptions o = rotation_options();
     o.guess.control = [](double t) { return Eigen::VectorXd::Constant(1, t < 0.55 ? 1.0 : -1.0); };
     const TrajoptResult r = solve_maneuver(body, p, o);
     REQUIRE(r.ok());
@@ -218,22 +231,8 @@ TEST_CASE("started from the NLopt switch-time design, the optimizer still finds 
   for (int k : {1, 2}) {
     const SwitchTimeResult nlopt = design_switch_times(body, 0, rotation, 1.0, k);
     REQUIRE(nlopt.ok());
-    ManeuverProblem p;
-    p.actuators = {0};
-    p.u_min = Eigen::VectorXd::Constant(1, -1.0);
-    p.u_max = Eigen::VectorXd::Constant(1, 1.0);
-    p.x_final(2) = rotation;
-    p.free_time = true;
-    p.w_energy = 0.0;
-    p.w_time = 1.0;
-    p.duration_s = nlopt.duration_s;
-    p.t_min_s = 0.5;
-    p.t_max_s = 3.0;
-    p.elastic = true;
-    p.modes_at_rest = k;
-    TrajoptOptions o;
-    o.intervals = 150;
-    o.tol = 1e-10;
+    const ManeuverProblem p = min_time_rotation(rotation, k, nlopt.duration_s);
+    TrajoptOptions o = rotation_options();
     const std::vector<double> s = nlopt.switch_times;
     o.guess.control = [s](double t) {
       double sign = 1.0;
