@@ -10,6 +10,7 @@
 
 #include <Eigen/Dense>
 
+#include "freeflex/enum_names.hpp"
 #include "freeflex/model/basis.hpp"
 #include "freeflex/model/beam.hpp"
 #include "freeflex/model/finite_element_basis.hpp"
@@ -43,6 +44,13 @@ struct BasisOptions {
   enum class Kind { Paper, FiniteElement };
   Kind kind = Kind::Paper;
   FiniteElementOptions finite_element;  ///< used when kind is FiniteElement
+};
+
+template <>
+struct EnumNames<BasisOptions::Kind> {
+  static constexpr const char* what = "basis";
+  static constexpr std::array<std::pair<BasisOptions::Kind, const char*>, 2> names{
+      {{BasisOptions::Kind::Paper, "paper"}, {BasisOptions::Kind::FiniteElement, "finite_element"}}};
 };
 
 /// The basis of n functions that `options` chooses. Throws std::invalid_argument for
