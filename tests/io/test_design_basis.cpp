@@ -64,7 +64,7 @@ TEST_CASE("[model] bad basis keys name key, line, value and what is allowed", "[
   CHECK_THAT(all, Contains("model.noa = 0"));
 }
 
-TEST_CASE("tapered beam and segments: [start, end] pairs load; bad pairs are reported", "[io]") {
+TEST_CASE("tapered beam and segments: [start, end] pairs load, bad pairs are reported", "[io]") {
   const Design d = parse_design(
       "[beam]\nlength_m = 2.0\nmass_per_length_kg_m = [1.2, 0.4]\nbending_stiffness_Nm2 = [2.0, 0.5]\n", "t.toml");
   REQUIRE(d.beam.segments.size() == 1);
