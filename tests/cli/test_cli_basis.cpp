@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -83,4 +85,44 @@ TEST_CASE("modes: the paper's basis on a stepped beam reports the change with NO
     CHECK(rows[k].error_estimate <= err * 1.005);
   }
   CHECK_THAT(run_cli("modes " + design, "2>/dev/null").output, Contains("change from NOA 10 to NOA 20"));
+}
+
+TEST_CASE("the shipped suppression chain runs on the FE basis: stepped beam, hub and tip mass", "[cli]") {
+  // maneuver optimization (zero-order model), TV-LQR on the first-order model, closed loop
+  // on the first-order and the full model (issue 15, acceptance 5)
+  const std::string out = temp_path("stepped_suppression");
+  const CliResult r =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/suppress_stepped_hub_tip.toml --out " + out +
+              " --quiet");
+  REQUIRE(r.exit_code == 0);
+  std::ifstream in(out + "/comparison.csv");
+  std::string line;
+  std::getline(in, line);
+  REQUIRE(line.rfind("case,model,residual_vibration_energy_J,", 0) == 0);
+  std::map<std::string, double> energy;  // "case/model" -> residual vibration energy
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string c, m, e;
+    std::getline(ss, c, ',');
+    std::getline(ss, m, ',');
+    std::getline(ss, e, ',');
+    energy[c + "/" + m] = std::stod(e);
+  }
+  REQUIRE(energy.size() == 4);
+  // open loop rings (measured 1.56e-2 J on both models); the TV-LQR leaves 5e-9 J: the
+  // controller must take off at least 99.9 % on each model
+  for (const char* model : {"first_order", "nonlinear"}) {
+    INFO(model << ": open loop " << energy[std::string("open_loop/") + model] << " J, tvlqr "
+               << energy[std::string("tvlqr/") + model] << " J");
+    CHECK(energy[std::string("open_loop/") + model] > 1e-3);
+    CHECK(energy[std::string("tvlqr/") + model] < 1e-3 * energy[std::string("open_loop/") + model]);
+  }
+  // the first-order and the full model agree on the open-loop energy to a few percent
+  // (measured 0.16 %): the perturbation solution holds on this basis too
+  CHECK(std::abs(energy["open_loop/first_order"] / energy["open_loop/nonlinear"] - 1.0) < 0.02);
+  std::ifstream summary(out + "/summary.json");
+  std::stringstream ss;
+  ss << summary.rdbuf();
+  CHECK_THAT(ss.str(), Contains("\"basis\": \"finite_element\""));
+  CHECK_THAT(ss.str(), Contains("\"status\": \"ok\""));
 }
