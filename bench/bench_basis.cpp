@@ -13,6 +13,7 @@
 #include <string>
 
 #include "freeflex/sim/simulate.hpp"
+#include "support/reference_csv.hpp"  // the tests' stepped beam
 
 using namespace freeflex;
 
@@ -32,18 +33,8 @@ std::string label(const benchmark::State& state) {
   return state.range(1) == 0 ? "paper" : "finite_element, " + std::to_string(state.range(1)) + " quintic";
 }
 
-BeamProperties stepped_hub_tip() {
-  BeamProperties p;
-  p.segments = {{0.6, 1.2, 2.0}, {0.4, 0.6, 0.8}};
-  p.reference_m = 0.5;
-  p.hub_mass_kg = 0.3;
-  p.hub_rotary_inertia_kgm2 = 0.002;
-  p.point_masses = {{1.0, 0.1}};
-  return p;
-}
-
 void BM_build(benchmark::State& state) {
-  const Beam beam(stepped_hub_tip());
+  const Beam beam(freeflex_test::stepped_beam(true));
   const std::vector<ForceElement> elements{{"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
                                            {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}};
   const BasisOptions basis = basis_of(state);

@@ -9,50 +9,21 @@
 //   build-bench/bench/fe_convergence
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "freeflex/analysis/free_vibration.hpp"
 #include "freeflex/model/modal_integrals.hpp"
+#include "support/reference_csv.hpp"  // the tests' reader of tests/reference and their beams
 
 using namespace freeflex;
 
 namespace {
 
-std::vector<double> reference(const std::string& which) {
-  std::ifstream in(std::string(FREEFLEX_SOURCE_DIR) + "/tests/reference/stepped_beam_frequencies.csv");
-  std::string line;
-  std::getline(in, line);  // case,mode,omega_rad_s,...
-  std::vector<double> w;
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string c, mode, omega;
-    std::getline(ss, c, ',');
-    std::getline(ss, mode, ',');
-    std::getline(ss, omega, ',');
-    if (c == which) w.push_back(std::stod(omega));
-  }
-  return w;
-}
-
-BeamProperties stepped(bool payloads) {
-  BeamProperties p;
-  p.segments = {{0.6, 1.2, 2.0}, {0.4, 0.6, 0.8}};
-  if (payloads) {
-    p.reference_m = 0.5;
-    p.hub_mass_kg = 0.3;
-    p.hub_rotary_inertia_kgm2 = 0.002;
-    p.point_masses = {{1.0, 0.1}};
-  }
-  return p;
-}
-
-std::vector<double> errors(const Beam& beam, const BasisOptions& b, int n, const std::vector<double>& exact) {
+std::vector<double> errors(const Beam& beam, const BasisOptions& b, int n, const Eigen::VectorXd& exact) {
   const Eigen::VectorXd w = free_vibration(modal_integrals(beam, *make_basis(beam, n, b))).omega;
   std::vector<double> e;
-  for (int k = 0; k < 5; ++k) e.push_back(w(k) / exact[k] - 1.0);
+  for (int k = 0; k < 5; ++k) e.push_back(w(k) / exact(k) - 1.0);
   return e;
 }
 
@@ -61,8 +32,8 @@ std::vector<double> errors(const Beam& beam, const BasisOptions& b, int n, const
 int main() {
   for (const bool payloads : {false, true}) {
     const std::string name = payloads ? "stepped_hub_tip" : "stepped_bare";
-    const Beam beam(stepped(payloads));
-    const std::vector<double> exact = reference(name);
+    const Beam beam(freeflex_test::stepped_beam(payloads));
+    const Eigen::VectorXd exact = freeflex_test::reference_column("stepped_beam_frequencies.csv", name);
     std::printf("\n%s\n| basis | N | e1 | e2 | e3 | e4 | e5 | order (e5) |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n",
                 name.c_str());
     for (const int order : {3, 5}) {
