@@ -23,7 +23,7 @@ std::string ipopt_output_file(const TrajoptOptions& options) {
 
 ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const StudyLog& study_log) {
   const ManeuverStudy& st = *design.maneuver;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
+  const FlexibleBody body = design.body();
   std::ostream* log = study_log.log;
   TrajoptOptions opt = st.options;
   opt.verbose = !st.quiet && !quiet && log != nullptr;

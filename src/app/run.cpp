@@ -115,6 +115,11 @@ nlohmann::ordered_json summary_json(const Design& design, const RunResult& run) 
   summary["design"] = design.source;
   summary["title"] = design.title;
   summary["noa"] = design.noa;
+  if (design.basis.kind == BasisOptions::Kind::FiniteElement) {  // the paper's basis: as before
+    summary["basis"] = to_string(design.basis.kind);
+    summary["elements"] = design.basis.finite_element.elements;
+    summary["element_order"] = design.basis.finite_element.order;
+  }
   summary["status"] = to_string(run.status);
   summary["message"] = run.message;
   Json studies = Json::object();

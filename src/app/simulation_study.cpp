@@ -81,7 +81,7 @@ void fail(SimulationStudyResult& r, const StudyLog& study_log, const std::string
 SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver,
                                            const StudyLog& study_log) {
   const SimulationStudy& st = *design.simulation;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
+  const FlexibleBody body = design.body();
   Excitation ex = design.excitation();
   std::shared_ptr<const RigidTrajectory> nominal;
   if (maneuver && maneuver->flown) {

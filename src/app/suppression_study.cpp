@@ -138,7 +138,7 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
 SuppressionStudyResult run_suppression_study(const Design& design, const ManeuverStudyResult* maneuver,
                                              const StudyLog& study_log) {
   const ControllerStudy& st = *design.controller;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
+  const FlexibleBody body = design.body();
   const int ne = static_cast<int>(body.elements().size());
   std::ostream* log = study_log.log;
   SuppressionStudyResult r;
@@ -241,7 +241,7 @@ namespace detail {
 void write_suppression(const Design& design, const SuppressionStudyResult& r, RunOutput& out) {
   const ControllerStudy& st = *design.controller;
   if (r.cases.empty() || r.chain.status == SuppressionResult::Status::TvlqrFailed) return;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
+  const FlexibleBody body = design.body();
   std::ostringstream csv;
   csv << "case,model,residual_vibration_energy_J,peak_tip_deflection_m,tip_settling_time_s,final_position_error_m,"
          "final_attitude_error_rad,control_effort_N2s,peak_command,saturated_fraction,mean_vibration_energy_J\n";

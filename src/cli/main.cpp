@@ -4,6 +4,7 @@
 // with --quiet), 2 bad input (nothing written), 3 results could not be written.
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <string>
@@ -11,6 +12,7 @@
 #include "freeflex/app/run.hpp"
 #include "freeflex/io/output.hpp"
 #include "freeflex/model/basis.hpp"
+#include "freeflex/model/modal_integrals.hpp"
 #include "freeflex/version.hpp"
 
 namespace {
@@ -39,28 +41,63 @@ int parse_noa(const std::string& text) {
 
 int cmd_modes(const Args& a, const Design& d) {
   const int noa = a.noa > 0 ? a.noa : d.noa;
-  const ModeTable t = mode_table(d, noa);
+  // an error estimate where no closed form gives the exact frequencies (docs/theory.md 4b)
+  const bool estimate = !has_exact_modes(d);
+  const ModeTable t = mode_table(d, noa, estimate);
+  const bool fe = d.basis.kind == BasisOptions::Kind::FiniteElement;
   std::cout << std::setprecision(12);
   if (a.format == "csv") {
-    std::cout << "mode,omega_rad_s,freq_hz,lambda\n";
-    for (int k = 0; k < t.lambda.size(); ++k)
-      std::cout << k + 1 << ',' << t.omega_rad_s(k) << ',' << t.freq_hz(k) << ',' << t.lambda(k) << '\n';
+    std::cout << "mode,omega_rad_s,freq_hz,lambda" << (estimate ? ",error_estimate" : "") << '\n';
+    for (int k = 0; k < t.lambda.size(); ++k) {
+      std::cout << k + 1 << ',' << t.omega_rad_s(k) << ',' << t.freq_hz(k) << ',' << t.lambda(k);
+      if (estimate) {
+        std::cout << ',';
+        // empty cell where there is no estimate
+        if (std::isfinite(t.error_estimate(k))) std::cout << std::setprecision(3) << t.error_estimate(k);
+        std::cout << std::setprecision(12);
+      }
+      std::cout << '\n';
+    }
   } else if (a.format == "json") {
     auto array = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
     nlohmann::ordered_json j;
     j["design"] = d.source;
     j["noa"] = noa;
+    if (fe) {
+      j["basis"] = to_string(d.basis.kind);
+      j["elements"] = d.basis.finite_element.elements;
+      j["element_order"] = d.basis.finite_element.order;
+    }
     j["omega_rad_s"] = array(t.omega_rad_s);
     j["freq_hz"] = array(t.freq_hz);
     j["lambda"] = array(t.lambda);
+    if (estimate) {
+      // NaN (no estimate) is not JSON: null
+      nlohmann::ordered_json err = nlohmann::ordered_json::array();
+      for (int k = 0; k < t.error_estimate.size(); ++k)
+        err.push_back(std::isfinite(t.error_estimate(k)) ? nlohmann::ordered_json(t.error_estimate(k)) : nullptr);
+      j["error_estimate"] = err;
+      j["error_method"] = t.error_method;
+    }
     std::cout << j.dump(2) << '\n';
   } else {
-    std::cout << "elastic modes of '" << d.source << "', NOA = " << noa << "\n"
-              << std::setw(5) << "mode" << std::setw(18) << "omega [rad/s]" << std::setw(16) << "freq [Hz]"
-              << std::setw(14) << "lambda" << '\n';
-    for (int k = 0; k < t.lambda.size(); ++k)
+    std::cout << "elastic modes of '" << d.source << "', ";
+    if (fe)
+      std::cout << noa << " modes of " << d.basis.finite_element.elements
+                << (d.basis.finite_element.order == 5 ? " quintic" : " cubic") << " elements\n";
+    else
+      std::cout << "NOA = " << noa << "\n";
+    std::cout << std::setw(5) << "mode" << std::setw(18) << "omega [rad/s]" << std::setw(16) << "freq [Hz]"
+              << std::setw(14) << "lambda" << (estimate ? "   error est." : "") << '\n';
+    for (int k = 0; k < t.lambda.size(); ++k) {
       std::cout << std::setw(5) << k + 1 << std::fixed << std::setprecision(6) << std::setw(18) << t.omega_rad_s(k)
-                << std::setw(16) << t.freq_hz(k) << std::setw(14) << t.lambda(k) << std::defaultfloat << '\n';
+                << std::setw(16) << t.freq_hz(k) << std::setw(14) << t.lambda(k);
+      if (estimate) std::cout << std::scientific << std::setprecision(1) << std::setw(13) << t.error_estimate(k);
+      std::cout << std::defaultfloat << '\n';
+    }
+    if (estimate)
+      std::cout << "error est.: relative (omega - exact) / omega, " << t.error_method
+                << (fe ? "" : " (a Ritz estimate's error is at least this)") << '\n';
   }
   return kExitOk;
 }
@@ -86,7 +123,7 @@ int main(int argc, char** argv) {
   Args args;
   CLI::App* modes = app.add_subcommand("modes", "elastic natural frequencies of the design's beam (ascending)");
   modes->add_option("DESIGN", args.design, "design file (TOML)")->required();
-  modes->add_option("--noa", args.noa_text, "number of admissible functions, 1..100 (default: the design's model.noa)");
+  modes->add_option("--noa", args.noa_text, "number of shape functions (admissible functions, or finite-element modes kept), 1..100 (default: the design's model.noa)");
   modes->add_option("--format", args.format, "table, csv or json")->check(CLI::IsMember({"table", "csv", "json"}));
   CLI::App* run = app.add_subcommand("run", "does what the design asks; writes results and summary.json into DIR");
   run->add_option("DESIGN", args.design, "design file (TOML)")->required();

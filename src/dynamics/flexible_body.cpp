@@ -33,7 +33,14 @@ void applied_force(const ForceElement& el, double psi, Eigen::Vector2d& f, Eigen
 
 FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> elements,
                            std::vector<double> damping_ratios)
-    : beam_(beam), basis_(make_basis(beam, noa)), mi_(modal_integrals(beam_, basis_)), elements_(std::move(elements)) {
+    : FlexibleBody(beam, noa, BasisOptions{}, std::move(elements), std::move(damping_ratios)) {}
+
+FlexibleBody::FlexibleBody(const Beam& beam, int modes, const BasisOptions& basis,
+                           std::vector<ForceElement> elements, std::vector<double> damping_ratios)
+    : beam_(beam),
+      basis_(make_basis(beam_, modes, basis)),
+      mi_(modal_integrals(beam_, *basis_)),
+      elements_(std::move(elements)) {
   for (const auto& e : elements_) {
     if (!std::isfinite(e.position_m) || e.position_m < 0.0 || e.position_m > beam_.length()) {
       std::ostringstream os;
@@ -42,12 +49,12 @@ FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> 
       throw std::invalid_argument(os.str());
     }
     const double x = beam_.x_of(e.position_m);
-    const BasisValues v = basis_.evaluate(x);
+    const BasisValues v = basis_->evaluate(x);
     x_.push_back(x);
     phi_.push_back(v.phi);
     dphi_.push_back(v.dphi);
   }
-  const int n = basis_.size(), N = 3 + n;
+  const int n = basis_->size(), N = 3 + n;
   // Schur complement of the rigid block of the rest mass matrix (eq. 6.8).
   const Eigen::MatrixXd M0 = mass_matrix(0.0, Eigen::VectorXd::Zero(n));
   M_condensed_ = mi_.M - M0.block(3, 0, n, 3) * M0.topLeftCorner<3, 3>().ldlt().solve(M0.block(0, 3, 3, n));

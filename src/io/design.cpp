@@ -32,6 +32,8 @@ std::vector<ForceElement> Design::force_elements() const {
   return e;
 }
 
+FlexibleBody Design::body() const { return FlexibleBody(Beam(beam), noa, basis, force_elements(), damping_ratios); }
+
 Excitation Design::excitation() const {
   Excitation ex;
   for (const auto& l : loads) ex.profiles.emplace_back(l.profile);
@@ -59,9 +61,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   Design d;
   d.source = source;
   d.title = root.string("title", false).value_or(d.title);
-  Section model = root.table("model");
-  d.noa = static_cast<int>(model.integer("noa", 1, kMaxNoa, false).value_or(d.noa));
-  model.finish();
+  io_detail::read_model(root, d);
   io_detail::read_beam(root, d);
   Section out = root.table("output");
   d.plots = out.boolean("plots", false).value_or(d.plots);

@@ -13,7 +13,9 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
   Section s = root.table("free_vibration");
   if (!s.present()) return;
   FreeVibrationStudy fv;
-  if (auto v = s.integer_array("noa_sweep", 1, kMaxNoa, false)) fv.noa_sweep.assign(v->begin(), v->end());
+  // noa: functions of the paper's basis, or modes kept from the finite-element model
+  const int most = max_modes(d);
+  if (auto v = s.integer_array("noa_sweep", 1, most, false)) fv.noa_sweep.assign(v->begin(), v->end());
   fv.modes = static_cast<int>(s.integer("modes", 1, kMaxNoa, false).value_or(fv.modes));
   fv.paper_table = s.boolean("paper_table", false).value_or(fv.paper_table);
   fv.table_name = s.string("table_name", false, true).value_or(fv.table_name);
@@ -21,7 +23,7 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
   for (auto& m : s.table_array("mode_shape")) {
     ModeShapeRequest r;
     auto name = m.string("name", true, true);
-    r.noa = static_cast<int>(m.integer("noa", 1, kMaxNoa, false).value_or(d.noa));
+    r.noa = static_cast<int>(m.integer("noa", 1, most, false).value_or(d.noa));
     auto mode = m.integer("mode", 1, r.noa, true);
     r.points = static_cast<int>(m.integer("points", 2, 100000, false).value_or(r.points));
     m.finish();

@@ -305,6 +305,24 @@ std::optional<std::vector<double>> Section::number_array(const std::string& key,
   return out;
 }
 
+std::optional<std::pair<double, std::optional<double>>> Section::number_or_pair(const std::string& key,
+                                                                                const Range& range, bool required) {
+  const toml::node* n = table_ ? table_->get(key) : nullptr;
+  if (!n || !n->is_array()) {
+    const auto v = number(key, range, required);
+    if (!v) return std::nullopt;
+    return std::make_pair(*v, std::optional<double>());
+  }
+  const auto v = number_array(key, range, required);
+  if (!v) return std::nullopt;
+  if (v->size() != 2) {
+    report(key, line_of(*n), key_path(key) + " has " + std::to_string(v->size()) +
+                                 " entries, must be a number or [start, end] (two numbers, varying linearly)");
+    return std::nullopt;
+  }
+  return std::make_pair((*v)[0], std::optional<double>((*v)[1]));
+}
+
 std::optional<std::vector<std::string>> Section::string_array(const std::string& key, bool required) {
   const toml::node* n = get(key);
   if (!n) {

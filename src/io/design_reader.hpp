@@ -99,6 +99,10 @@ class Section {
   std::vector<std::pair<std::string, std::string>> raw_entries();
   std::optional<std::vector<double>> number_array(const std::string& key, const Range& range,
                                                   bool required);
+  /// A number, or [start, end]: two numbers (a property varying linearly along a piece).
+  /// Returns {start, end}; end is empty for a single number.
+  std::optional<std::pair<double, std::optional<double>>> number_or_pair(const std::string& key, const Range& range,
+                                                                         bool required);
   /// A sub-table ([beam.hub]); absent gives a Section with present() false.
   Section table(const std::string& key);
   /// An array of tables ([[beam.segment]]).

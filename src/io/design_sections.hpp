@@ -107,6 +107,9 @@ using FieldKeys = std::vector<std::pair<std::string, std::string>>;
 void report_field_problems(Section& s, const std::vector<FieldProblem>& problems, const FieldKeys& keys);
 
 // One reader per section; each fills its part of the design and reports its problems.
+void read_model(Section& root, Design& d);
+/// Largest number of shape functions the design's basis offers (kMaxNoa for the paper's).
+int max_modes(const Design& d);
 void read_beam(Section& root, Design& d);
 void read_free_vibration(Section& root, Design& d, Outputs& outputs);
 /// Returns the names of the actuators rejected for a bad field (already reported), so that

@@ -2,6 +2,7 @@
 // cancellation, and the basis on both halves of the beam.
 #include "freeflex/model/basis.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -54,11 +55,42 @@ AdmissibleBasis::AdmissibleBasis(int n, double a_left, double a_right)
   }
   if (!(a_left > 0.0) || !(a_right > 0.0) || !std::isfinite(a_left) || !std::isfinite(a_right))
     throw std::invalid_argument("admissible basis: both half-lengths must be finite and > 0");
-  for (int k = 1; k <= (n + 1) / 2; ++k) modes_.emplace_back(k);
+  symmetric_ = std::abs(a_left - a_right) <= 1e-12 * (a_left + a_right);
+  if (symmetric_) {
+    for (int k = 1; k <= (n + 1) / 2; ++k) modes_.emplace_back(k);
+    for (int j = 0; j < n; ++j) functions_.push_back({j % 2 == 0 ? Shape::Symmetric : Shape::Antisymmetric, j / 2});
+    return;
+  }
+  // eq. 2.4: merge the two sides' sequences by wavenumber lambda_k / a (ties: the longer side first).
+  const bool left_longer = a_left > a_right;
+  int kl = 0, kr = 0;
+  while (static_cast<int>(functions_.size()) < n) {
+    const int k = std::max(kl, kr);
+    while (static_cast<int>(modes_.size()) <= k) modes_.emplace_back(static_cast<int>(modes_.size()) + 1);
+    const double wl = modes_[kl].lambda / a_left, wr = modes_[kr].lambda / a_right;
+    if (wl < wr || (wl == wr && left_longer)) functions_.push_back({Shape::Left, kl++});
+    else functions_.push_back({Shape::Right, kr++});
+  }
 }
 
 double AdmissibleBasis::max_wavenumber() const {
-  return modes_.back().lambda / std::min(a_left_, a_right_);
+  if (symmetric_) return modes_.back().lambda / std::min(a_left_, a_right_);
+  double w = 0.0;
+  for (const Function& f : functions_)
+    w = std::max(w, modes_[f.k].lambda / (f.shape == Shape::Left ? a_left_ : a_right_));
+  return w;
+}
+
+int AdmissibleBasis::functions_left() const {
+  int c = 0;
+  for (const Function& f : functions_) c += f.shape != Shape::Right;
+  return c;
+}
+
+int AdmissibleBasis::functions_right() const {
+  int c = 0;
+  for (const Function& f : functions_) c += f.shape != Shape::Left;
+  return c;
 }
 
 BasisValues AdmissibleBasis::evaluate(double x) const {
@@ -68,11 +100,16 @@ BasisValues AdmissibleBasis::evaluate(double x) const {
   const double sgn = right ? 1.0 : -1.0;
   const double xi = std::abs(x);
   for (int j = 0; j < n_; ++j) {
-    const CantileverConstants& mode = modes_[j / 2];
+    const Function& f = functions_[j];
+    if ((f.shape == Shape::Left && right) || (f.shape == Shape::Right && !right)) {
+      v.phi(j) = v.dphi(j) = v.ddphi(j) = 0.0;  // a one-sided function on its other side
+      continue;
+    }
+    const CantileverConstants& mode = modes_[f.k];
     const double beta = mode.lambda / a;
     const CantileverMode p = mode.at(beta * xi);
     // d/dx psi(beta |x|) = sign(x) beta psi'; the antisymmetric ones carry one more sign(x).
-    if (j % 2 == 0) {
+    if (f.shape != Shape::Antisymmetric) {
       v.phi(j) = p.value;
       v.dphi(j) = sgn * beta * p.d1;
       v.ddphi(j) = beta * beta * p.d2;

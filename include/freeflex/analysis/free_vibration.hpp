@@ -32,7 +32,7 @@ double paper_lambda(double omega_rad_s, double mass_kg, double length_m, double 
 
 /// Transverse displacement (body y) of a mode at body points x at rest:
 /// Ry + x theta + Phi(x) q, from an eigenvector z = [Rx, Ry, theta, q].
-Eigen::VectorXd mode_displacement(const AdmissibleBasis& basis, const Eigen::VectorXd& z,
+Eigen::VectorXd mode_displacement(const ShapeBasis& basis, const Eigen::VectorXd& z,
                                   const Eigen::VectorXd& x);
 
 }  // namespace freeflex

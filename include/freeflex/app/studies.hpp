@@ -39,11 +39,21 @@ struct StudyLog {
   std::function<void(const std::string&)> warn;  ///< optional; must not throw
 };
 
-/// Elastic natural frequencies of a design's beam with `noa` functions.
+/// Elastic natural frequencies of a design's beam with `noa` functions of its basis and,
+/// if asked, an estimate of each one's error from a refined model (docs/theory.md
+/// section 4b): finite-element basis, Richardson extrapolation from the same model on
+/// twice the elements at the element order's rate (h^4 or h^8); paper's basis, the
+/// change to NOA 2 noa (capped at kMaxNoa; at NOA kMaxNoa, the change from NOA kMaxNoa/2),
+/// which the error of a Ritz estimate is at least.
 struct ModeTable {
   Eigen::VectorXd omega_rad_s, freq_hz, lambda;
+  Eigen::VectorXd error_estimate;  ///< relative (omega - omega_exact) / omega; empty unless asked; NaN where none
+  std::string error_method;        ///< how error_estimate was found, for reports
 };
-ModeTable mode_table(const Design& design, int noa);
+ModeTable mode_table(const Design& design, int noa, bool estimate_error = false);
+/// True when the closed-form free-free beam gives the design's exact frequencies: one
+/// uniform span, no hub, no payload (then no error estimate is needed).
+bool has_exact_modes(const Design& design);
 
 /// [free_vibration]: frequencies over the NOA sweep, mode shapes against the exact beam.
 struct FreeVibrationStudyResult {
@@ -57,8 +67,10 @@ struct FreeVibrationStudyResult {
   struct Frequencies {
     int noa = 0;
     Eigen::VectorXd lambda, omega_rad_s;  ///< the elastic modes reported at this NOA
+    Eigen::VectorXd error_estimate;       ///< relative; empty where the exact beam applies (mode_table)
   };
   std::vector<Frequencies> frequencies;
+  std::string error_method;  ///< how error_estimate was found (empty where the exact beam applies)
   struct ModeShape {
     std::string name;
     int noa = 0, mode = 0;

@@ -3,6 +3,7 @@
 // modal integrals, the configuration-dependent mass matrix, generalized forces of the
 // force elements with their derivatives, and modal damping. The allocation-free forms
 // the simulators' right-hand sides use are private to src/ (dynamics/body_kernels.hpp).
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,15 +16,20 @@ namespace freeflex {
 
 class FlexibleBody {
  public:
-  /// `damping_ratios[i]` damps elastic mode i+1 (modes beyond the list are undamped).
-  /// Throws std::invalid_argument for an element off the beam or a negative ratio.
+  /// On the paper's basis of `noa` admissible functions. `damping_ratios[i]` damps
+  /// elastic mode i+1 (modes beyond the list are undamped). Throws std::invalid_argument
+  /// for an element off the beam or a negative ratio.
   FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> elements,
                std::vector<double> damping_ratios = {});
+  /// On the basis of n functions that `basis` chooses (make_basis); throws as above and
+  /// as make_basis does.
+  FlexibleBody(const Beam& beam, int n, const BasisOptions& basis, std::vector<ForceElement> elements,
+               std::vector<double> damping_ratios = {});
 
-  int n() const { return basis_.size(); }       ///< elastic coordinates
-  int dofs() const { return 3 + basis_.size(); } ///< z = [Rx, Ry, theta, q]
+  int n() const { return basis_->size(); }       ///< elastic coordinates
+  int dofs() const { return 3 + basis_->size(); } ///< z = [Rx, Ry, theta, q]
   const Beam& beam() const { return beam_; }
-  const AdmissibleBasis& basis() const { return basis_; }
+  const ShapeBasis& basis() const { return *basis_; }
   const ModalIntegrals& integrals() const { return mi_; }
   const std::vector<ForceElement>& elements() const { return elements_; }
   /// Index of the element called `name`, or -1.
@@ -65,7 +71,7 @@ class FlexibleBody {
 
  private:
   Beam beam_;
-  AdmissibleBasis basis_;
+  std::shared_ptr<const ShapeBasis> basis_;  // immutable: copies of the body share it
   ModalIntegrals mi_;
   std::vector<ForceElement> elements_;
   std::vector<double> x_;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "freeflex/control/tvlqr.hpp"
+#include "freeflex/dynamics/flexible_body.hpp"
 #include "freeflex/model/beam.hpp"
 #include "freeflex/model/loads.hpp"
 #include "freeflex/sim/simulate.hpp"
@@ -128,7 +129,8 @@ struct Design {
   std::string source;  ///< file name, for messages
   std::string title;
   BeamProperties beam;
-  int noa = 6;         ///< [model] number of admissible functions
+  int noa = 6;         ///< [model] number of shape functions (elastic coordinates)
+  BasisOptions basis;  ///< [model] which basis: the paper's (default) or finite-element modes
   bool plots = true;   ///< [output] write PNG figures with gnuplot
   std::vector<LoadSpec> loads;
   std::vector<ActuatorSpec> actuators;
@@ -143,6 +145,9 @@ struct Design {
   std::vector<ForceElement> force_elements() const;
   /// The loads' profiles in that order (actuators have none).
   Excitation excitation() const;
+  /// The discretized body every model of the design is built on: the beam on the design's
+  /// basis with `noa` functions, its force elements and damping.
+  FlexibleBody body() const;
 };
 
 /// Reads and validates a design file. Throws DesignError (bad content, unreadable file,

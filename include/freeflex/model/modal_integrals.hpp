@@ -4,11 +4,18 @@
 //   m = int dm, S_o = int x dm, I_o = int x^2 dm + hub rotary inertia
 //   M = int Phi^T Phi dm, Phi_bar = int Phi dm, Phi_tilde = int x Phi dm,
 //   K = int EI Phi''^T Phi'' dx
+// for any shape basis (the paper's admissible functions or the finite-element modes).
+#include <memory>
+#include <string>
+
 #include <Eigen/Dense>
 
+#include "freeflex/enum_names.hpp"
 #include "freeflex/model/basis.hpp"
 #include "freeflex/model/beam.hpp"
+#include "freeflex/model/finite_element_basis.hpp"
 #include "freeflex/model/quadrature.hpp"
+#include "freeflex/model/shape_basis.hpp"
 
 namespace freeflex {
 
@@ -32,11 +39,30 @@ struct ModalIntegrals {
 /// The admissible basis of a beam: two cantilevers clamped at o.
 AdmissibleBasis make_basis(const Beam& beam, int noa);
 
-/// Quadrature nodes (body x) and weights that integrate the basis products exactly to
-/// round-off: composite 20-point Gauss-Legendre on each side of o and each segment,
-/// panels no wider than 2.5 / (largest wavenumber).
-GaussRule beam_quadrature(const Beam& beam, const AdmissibleBasis& basis);
+/// Which basis a model is built on, and the finite-element basis's settings.
+struct BasisOptions {
+  enum class Kind { Paper, FiniteElement };
+  Kind kind = Kind::Paper;
+  FiniteElementOptions finite_element;  ///< used when kind is FiniteElement
+};
 
-ModalIntegrals modal_integrals(const Beam& beam, const AdmissibleBasis& basis);
+template <>
+struct EnumNames<BasisOptions::Kind> {
+  static constexpr const char* what = "basis";
+  static constexpr std::array<std::pair<BasisOptions::Kind, const char*>, 2> names{
+      {{BasisOptions::Kind::Paper, "paper"}, {BasisOptions::Kind::FiniteElement, "finite_element"}}};
+};
+
+/// The basis of n functions that `options` chooses. Throws std::invalid_argument for
+/// bad options or n (see AdmissibleBasis, FiniteElementBasis).
+std::shared_ptr<const ShapeBasis> make_basis(const Beam& beam, int n, const BasisOptions& options);
+
+/// Quadrature nodes (body x) and weights that integrate products of basis functions (and
+/// of their derivatives) times the beam's mass or stiffness exactly to round-off:
+/// composite 20-point Gauss-Legendre between the beam's breakpoints and the basis's cuts,
+/// panels no wider than the basis's max_panel_width().
+GaussRule beam_quadrature(const Beam& beam, const ShapeBasis& basis);
+
+ModalIntegrals modal_integrals(const Beam& beam, const ShapeBasis& basis);
 
 }  // namespace freeflex
