@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include <sys/mount.h>
@@ -13,6 +14,7 @@
 #include <unistd.h>
 
 #include "support/cli.hpp"
+#include "support/mutate.hpp"
 
 using namespace freeflex_test;
 using Catch::Contains;
@@ -127,4 +129,30 @@ TEST_CASE("out of inodes: the message names DIR and says inodes, not a staging f
   CHECK_THAT(r.output, Contains("No space left on device (the file system is full or has no free inodes); '" + out +
                                 "' keeps the previous run's files"));
   CHECK(r.output.find(".freeflex-staging-") == std::string::npos);
+}
+
+TEST_CASE("seeded mutants of the free-vibration design run or are refused, with exit 0, 1 or 2", "[cli][fuzz]") {
+  // the quick one of the shipped designs, so that a few dozen runs stay within seconds
+  const std::string base = read(kTable1);
+  std::mt19937 rng(20);
+  int ran = 0, refused = 0;
+  for (int k = 0; k < 100; ++k) {
+    const std::string design = write_temp("mutant", mutate(base, rng));
+    const std::string out = temp_path("mutant_out");
+    const CliResult r = run_cli("run " + design + " --out " + out + " --quiet");
+    INFO("mutant " << k << ":\n" << read(design) << "\n" << r.output);
+    REQUIRE((r.exit_code == 0 || r.exit_code == 1 || r.exit_code == 2));
+    if (r.exit_code == 2) {
+      ++refused;
+      CHECK(!exists(out));  // bad input: nothing written
+      CHECK_THAT(r.output, Contains("design '" + design + "'"));
+    } else {
+      ++ran;
+      CHECK(exists(out + "/summary.json"));
+    }
+    ::unlink(design.c_str());
+  }
+  // seed 20: both sides are exercised
+  CHECK(ran > 8);
+  CHECK(refused > 50);
 }
