@@ -1,6 +1,8 @@
 // [maneuver]: the rigid maneuver to optimize (actuators, boundary states, objective,
 // duration) and how (transcription, mesh, Ipopt and its options).
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <limits>
 
 #include "io/design_sections.hpp"
@@ -38,10 +40,10 @@ Eigen::Matrix<double, 6, 1> read_state(Section& m, const std::string& key) {
 
 using Kind = Section::RawEntry::Kind;
 
-/// Unknowns of the NLP on the first mesh (trajopt's CollocationNlp layout): 6 states and
+/// Unknowns of the NLP on a mesh of `intervals` (trajopt's CollocationNlp layout): 6 states and
 /// the controls at each point, the compressed form's midpoint controls, the free duration.
-double nlp_unknowns(const ManeuverStudy& st) {
-  const double N = st.options.intervals, nu = static_cast<double>(st.problem.actuators.size());
+double nlp_unknowns(const ManeuverStudy& st, int intervals) {
+  const double N = intervals, nu = static_cast<double>(st.problem.actuators.size());
   const Transcription tr = st.options.transcription;
   const double points = tr == Transcription::HermiteSimpson ? 2 * N + 1 : N + 1;
   return points * (6 + nu) + (tr == Transcription::HermiteSimpsonCompressed ? N * nu : 0) +
@@ -103,7 +105,7 @@ void read_ipopt_options(Section& m, ManeuverStudy& st, Outputs& outputs) {
       const std::string test = lower_trimmed(value);
       // the checker's work grows like n^3 (first order) or faster (second order) in the
       // NLP's unknowns, and it prints nothing until it ends: bound n
-      const double n = nlp_unknowns(st);
+      const double n = nlp_unknowns(st, o.intervals);
       const double most = test == "first-order" ? lim::kMaxDerivativeTestUnknowns : lim::kMaxSecondOrderTestUnknowns;
       if (test != "none" && n > most) {
         ip.problem(key, lead + " with maneuver.intervals = " + std::to_string(o.intervals) + " tests " +
@@ -117,6 +119,40 @@ void read_ipopt_options(Section& m, ManeuverStudy& st, Outputs& outputs) {
     }
     o.ipopt_options.emplace_back(key, e.text);
   }
+}
+
+/// The optimizer's work, bounded before any work: Ipopt iterations x NLP unknowns, summed
+/// over the mesh-refinement rounds (each round's mesh at most doubles, up to
+/// max_intervals). Reported at the first of max_iterations, intervals, mesh_refinements
+/// the file gives.
+void check_ipopt_work(Section& m, const ManeuverStudy& st) {
+  const TrajoptOptions& o = st.options;
+  if (st.problem.actuators.empty()) return;  // the actuators' problem is reported
+  long long iterations = o.max_iter;
+  std::string iterations_key = "max_iterations";
+  for (const auto& [key, value] : o.ipopt_options)
+    if (key == "max_iter") {
+      iterations = std::stoll(value);  // checked against Ipopt's registry: a whole number
+      iterations_key = "ipopt.max_iter";
+    }
+  double unknowns = 0;
+  for (int r = 0, n = o.intervals; r <= o.mesh_refinements; ++r, n = std::min(2 * n, o.max_intervals))
+    unknowns += nlp_unknowns(st, n);
+  const double work = static_cast<double>(iterations) * unknowns;
+  if (work <= lim::kMaxIpoptWork) return;
+  std::string at = "intervals";
+  for (const char* k : {"max_iterations", "intervals", "mesh_refinements"})
+    if (m.has(k)) {
+      at = k;
+      break;
+    }
+  std::ostringstream os;
+  os << m.key_path(iterations_key) << " = " << iterations << " with intervals = " << o.intervals
+     << " and mesh_refinements = " << o.mesh_refinements << " allows " << shortest(work)
+     << " Ipopt iteration-unknowns (iterations x NLP unknowns, " << shortest(unknowns)
+     << " unknowns over the rounds); at most " << shortest(lim::kMaxIpoptWork)
+     << " (about 3 min of CPU): lower max_iterations, intervals or mesh_refinements";
+  m.problem(at, os.str());
 }
 
 }  // namespace
@@ -197,6 +233,7 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   o.max_iter = static_cast<int>(m.integer("max_iterations", 1, lim::kMaxIterations, false).value_or(o.max_iter));
   st.quiet = m.boolean("quiet", false).value_or(st.quiet);
   read_ipopt_options(m, st, outputs);
+  check_ipopt_work(m, st);
   m.finish();
   outputs.fixed("[maneuver]", "trajectory.csv");
   for (const char* f : {"maneuver_states.gp", "maneuver_states.png", "maneuver_controls.gp", "maneuver_controls.png"})

@@ -105,18 +105,51 @@ TEST_CASE("Ipopt's derivative checker is bounded by the NLP's size", "[io][issue
   // (default 100 intervals, Hermite-Simpson: 201 points x 7 = 1407 unknowns)
   CHECK_THAT(problems_of(maneuver("quiet = true\n[maneuver.ipopt]\nderivative_test = \"second-order\"\n")),
              Contains("line 14: maneuver.ipopt.derivative_test = \"second-order\" with maneuver.intervals = 100 tests "
-                      "1407 NLP unknowns; at most 500 for this test"));
-  // 35 intervals: 71 x 7 = 497 unknowns; 36: 511
-  CHECK(problems_of(maneuver("intervals = 35\n[maneuver.ipopt]\nderivative_test = \"second-order\"\n")).empty());
-  CHECK_THAT(problems_of(maneuver("intervals = 36\n[maneuver.ipopt]\nderivative_test = \"only-second-order\"\n")),
-             Contains("tests 511 NLP unknowns; at most 500"));
-  // first order: 214 intervals give 429 x 7 = 3003
-  CHECK_THAT(problems_of(maneuver("intervals = 214\n[maneuver.ipopt]\nderivative_test = \"first-order\"\n")),
-             Contains("tests 3003 NLP unknowns; at most 3000"));
-  CHECK(problems_of(maneuver("intervals = 213\n[maneuver.ipopt]\nderivative_test = \"first-order\"\n")).empty());
+                      "1407 NLP unknowns; at most 400 for this test"));
+  // 28 intervals: 57 x 7 = 399 unknowns; 29: 413
+  CHECK(problems_of(maneuver("intervals = 28\n[maneuver.ipopt]\nderivative_test = \"second-order\"\n")).empty());
+  CHECK_THAT(problems_of(maneuver("intervals = 29\n[maneuver.ipopt]\nderivative_test = \"only-second-order\"\n")),
+             Contains("tests 413 NLP unknowns; at most 400"));
+  // first order: 142 intervals give 285 x 7 = 1995, 143 give 2009
+  CHECK(problems_of(maneuver("intervals = 142\n[maneuver.ipopt]\nderivative_test = \"first-order\"\n")).empty());
+  CHECK_THAT(problems_of(maneuver("intervals = 143\n[maneuver.ipopt]\nderivative_test = \"first-order\"\n")),
+             Contains("tests 2009 NLP unknowns; at most 2000"));
+  // the compressed form has no midpoint states: N + 1 points of 7 and N midpoint controls
+  CHECK_THAT(problems_of(maneuver("intervals = 300\ntranscription = \"hermite_simpson_compressed\"\n"
+                                  "[maneuver.ipopt]\nderivative_test = \"first-order\"\n")),
+             Contains("tests 2407 NLP unknowns; at most 2000"));
   const Design d = parse_design(maneuver("intervals = 10\n[maneuver.ipopt]\nderivative_test = \"first-order\"\n"), "t");
   REQUIRE(d.maneuver);
   CHECK(d.maneuver->options.derivative_test == "first-order");
+}
+
+TEST_CASE("the optimizer's work is bounded before any work", "[io][issue20]") {
+  // 5000 intervals, one actuator, fixed duration: 10 001 points x 7 = 70 007 unknowns;
+  // 857 iterations give 5.9996e7 iteration-unknowns, 858 give 6.0066e7
+  CHECK(problems_of(maneuver("intervals = 5000\nmax_iterations = 857\n")).empty());
+  CHECK_THAT(problems_of(maneuver("intervals = 5000\nmax_iterations = 858\n")),
+             Contains("line 13: maneuver.max_iterations = 858 with intervals = 5000 and mesh_refinements = 0 allows "
+                      "60066006 Ipopt iteration-unknowns"));
+  // the default 3000 iterations; Ipopt's own max_iter counts when given there
+  CHECK_THAT(problems_of(maneuver("intervals = 5000\n")), Contains("line 12: maneuver.max_iterations = 3000"));
+  CHECK_THAT(problems_of(maneuver("intervals = 5000\n[maneuver.ipopt]\nmax_iter = 1000\n")),
+             Contains("maneuver.ipopt.max_iter = 1000 with intervals = 5000"));
+  // refinement rounds add up: 100 intervals, 4 rounds: 100 + 200 + 400 + 800 + 1600
+  CHECK_THAT(problems_of(maneuver("mesh_refinements = 4\n")),
+             Contains("line 12: maneuver.max_iterations = 3000 with intervals = 100 and mesh_refinements = 4"));
+  CHECK(problems_of(maneuver("mesh_refinements = 2\n")).empty());
+}
+
+TEST_CASE("the TV-LQR's stored gains are bounded with the grid", "[io][issue20]") {
+  // two actuators at noa = 100: 2 x 206 doubles per grid point, at most 121359 points
+  const std::string two = "[[actuator]]\nname = \"a\"\ntype = \"torque\"\nposition_m = 0.5\n"
+                          "[[actuator]]\nname = \"b\"\ntype = \"torque\"\nposition_m = 0.2\n";
+  const std::string ctl = kPaperBeam + "[model]\nnoa = 100\n" + kLoad + two +
+                          "[controller]\nactuators = [\"a\", \"b\"]\nhorizon_s = 1.2\n";  // [controller] line 24
+  CHECK(problems_of(ctl + "grid_step_s = 1e-5\n").empty());  // 120001 points
+  CHECK_THAT(problems_of(ctl + "grid_step_s = 0.9e-5\n"),
+             Contains("line 27: controller.grid_step_s = 9e-06 and 2 actuator(s) at noa = 100 with horizon_s = 1.2 "
+                      "gives 133335 TV-LQR gain grid points of 412 doubles each; at most 121359"));
 }
 
 TEST_CASE("a figure's text is bounded and free of control characters", "[io][issue20]") {
