@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "support/cli.hpp"
+#include "support/files.hpp"
 #include "support/mutate.hpp"
 
 using namespace freeflex_test;
@@ -22,12 +23,6 @@ using Catch::Contains;
 namespace {
 const std::string kBeam = "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n";
 const std::string kTable1 = std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_table1.toml";
-std::string read(const std::string& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 }  // namespace
 
 TEST_CASE("a gnuplot that stalls is stopped at its time limit and the run still writes its results", "[cli][issue20]") {
@@ -51,7 +46,7 @@ TEST_CASE("a gnuplot that stalls is stopped at its time limit and the run still 
   CHECK(exists(out + "/fig3_mode4.csv"));
   CHECK(exists(out + "/fig3_mode4.gp"));
   CHECK(!exists(out + "/fig3_mode4.png"));
-  CHECK_THAT(read(out + "/summary.json"), Contains("did not finish fig3_mode4.gp within 0.5 s"));
+  CHECK_THAT(read_text(out + "/summary.json"), Contains("did not finish fig3_mode4.gp within 0.5 s"));
   CHECK(bad_limit.exit_code == 2);
   CHECK_THAT(bad_limit.output, Contains("FREEFLEX_GNUPLOT_TIMEOUT_S = 'forever'"));
 }
@@ -71,7 +66,7 @@ TEST_CASE("with --quiet a failed run still prints why, and summary.json says it 
   INFO(r.output);
   CHECK(r.exit_code == 1);
   CHECK_THAT(r.output, Contains("freeflex: failed: maneuver optimization did not succeed (max_iterations)"));
-  const std::string summary = read(out + "/summary.json");
+  const std::string summary = read_text(out + "/summary.json");
   CHECK_THAT(summary, Contains("\"message\": \"maneuver optimization did not succeed (max_iterations)"));
   CHECK_THAT(summary, Contains("\"status\": \"max_iterations\""));
   CHECK_THAT(summary, Contains("\"transcription\": \"hermite_simpson\""));
@@ -133,14 +128,14 @@ TEST_CASE("out of inodes: the message names DIR and says inodes, not a staging f
 
 TEST_CASE("seeded mutants of the free-vibration design run or are refused, with exit 0, 1 or 2", "[cli][fuzz]") {
   // the quick one of the shipped designs, so that a few dozen runs stay within seconds
-  const std::string base = read(kTable1);
+  const std::string base = read_text(kTable1);
   std::mt19937 rng(20);
   int ran = 0, refused = 0;
   for (int k = 0; k < 100; ++k) {
     const std::string design = write_temp("mutant", mutate(base, rng));
     const std::string out = temp_path("mutant_out");
     const CliResult r = run_cli("run " + design + " --out " + out + " --quiet");
-    INFO("mutant " << k << ":\n" << read(design) << "\n" << r.output);
+    INFO("mutant " << k << ":\n" << read_text(design) << "\n" << r.output);
     REQUIRE((r.exit_code == 0 || r.exit_code == 1 || r.exit_code == 2));
     if (r.exit_code == 2) {
       ++refused;

@@ -13,6 +13,7 @@
 
 #include "freeflex/io/design.hpp"
 #include "support/designs.hpp"
+#include "support/files.hpp"
 #include "support/mutate.hpp"
 
 using namespace freeflex;
@@ -20,13 +21,6 @@ using namespace freeflex_test;
 using Catch::Contains;
 
 namespace {
-
-std::string read(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::vector<std::filesystem::path> files_in(const std::string& dir) {
   std::vector<std::filesystem::path> files;
@@ -49,7 +43,7 @@ TEST_CASE("the designs that found issue 20's defects get their messages", "[io][
   const auto files = files_in(std::string(FREEFLEX_SOURCE_DIR) + "/tests/io/fuzz_corpus");
   REQUIRE(files.size() >= 7);
   for (const auto& f : files) {
-    const std::string text = read(f);
+    const std::string text = read_text(f);
     const auto lines = lines_of(text);
     REQUIRE(lines.size() > 2);
     const std::string tag = "# expect: ";
@@ -67,7 +61,7 @@ TEST_CASE("seeded mutants of the shipped designs load or are refused, never anyt
   REQUIRE(designs.size() >= 7);
   int loaded = 0, refused = 0;
   for (int k = 0; k < 400; ++k) {
-    const std::string base = read(designs[static_cast<std::size_t>(k) % designs.size()]);
+    const std::string base = read_text(designs[static_cast<std::size_t>(k) % designs.size()]);
     const std::string text = mutate(base, rng);
     INFO("mutant " << k << " of " << designs[static_cast<std::size_t>(k) % designs.size()].filename() << ":\n"
                    << text);

@@ -14,6 +14,7 @@
 #include "io/run_program.hpp"
 #include "io/system_error.hpp"
 #include "support/designs.hpp"
+#include "support/files.hpp"
 
 using namespace freeflex;
 using namespace freeflex_test;
@@ -24,12 +25,6 @@ std::string repeated(const std::string& s, int n) {
   std::string r;
   for (int i = 0; i < n; ++i) r += s;
   return r;
-}
-std::string read(const std::string& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 // A maneuver with one hub torque; [maneuver] on line 9, `extra` from line 12 on.
 std::string maneuver(const std::string& extra) {
@@ -163,12 +158,12 @@ TEST_CASE("a figure's text is bounded and free of control characters", "[io][iss
   no_gnuplot.gnuplot = "";
   const PlotResult r = render_plot(spec, dir, no_gnuplot);
   CHECK(r.status == PlotResult::Status::NoGnuplot);
-  const std::string gp = read(dir + "/p.gp");
+  const std::string gp = read_text(dir + "/p.gp");
   CHECK(gp.find('\t') == std::string::npos);
   CHECK(gp.size() < 2 * kMaxFigureTextBytes);  // the script's own text is a few hundred bytes
   spec.title = "\xCE\xB8 = 90\xC2\xB0 \xFF it's";  // UTF-8 kept, an invalid byte shown as '?', quotes doubled
   render_plot(spec, dir, no_gnuplot);
-  CHECK_THAT(read(dir + "/p.gp"), Contains("'\xCE\xB8 = 90\xC2\xB0 ? it''s'"));
+  CHECK_THAT(read_text(dir + "/p.gp"), Contains("'\xCE\xB8 = 90\xC2\xB0 ? it''s'"));
   std::filesystem::remove_all(dir);
 }
 
