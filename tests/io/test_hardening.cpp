@@ -147,6 +147,27 @@ TEST_CASE("the TV-LQR's stored gains are bounded with the grid", "[io][issue20]"
                       "gives 133335 TV-LQR gain grid points of 412 doubles each; at most 121359"));
 }
 
+TEST_CASE("force elements and load profile times are bounded", "[io][issue20]") {
+  auto loads = [](int n, int times) {
+    std::string s;
+    for (int i = 0; i < n; ++i) {
+      s += "[[load]]\nname = \"F" + std::to_string(i) + "\"\ntype = \"torque\"\nposition_m = 0.5\n"
+           "[load.profile]\ntype = \"linear\"\ntimes_s = [";
+      for (int k = 0; k < times; ++k) s += (k ? ", " : "") + std::to_string(k);
+      s += "]\nvalues = [";
+      for (int k = 0; k < times; ++k) s += k ? ", 1.0" : "1.0";
+      s += "]\n";
+    }
+    return s;
+  };
+  CHECK(problems_of(kPaperBeam + loads(64, 2)).empty());
+  CHECK_THAT(problems_of(kPaperBeam + loads(65, 2)),
+             Contains("line 5: 65 [[load]] and 0 [[actuator]] tables; at most 64 together"));
+  CHECK(problems_of(kPaperBeam + loads(2, 5000)).empty());
+  CHECK_THAT(problems_of(kPaperBeam + loads(2, 5001)),
+             Contains("line 17: load[2].profile: the load profiles have 10002 times_s entries up to here; at most 10000"));
+}
+
 TEST_CASE("a figure's text is bounded and free of control characters", "[io][issue20]") {
   const std::string dir = (std::filesystem::temp_directory_path() / "freeflex_test_plot_text").string();
   std::filesystem::remove_all(dir);
