@@ -31,6 +31,10 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     *log << "maneuver: " << to_string(opt.transcription) << ", " << opt.intervals << " intervals, "
          << (st.problem.free_time ? "free" : "fixed") << " duration" << (opt.verbose ? " (Ipopt log follows)" : " ...")
          << std::endl;
+  // the checker prints nothing until it ends, quiet or not: say what it is doing (its work
+  // is bounded by the design, design_limits::kMaxDerivativeTestUnknowns)
+  if (log && opt.derivative_test != "none")
+    *log << "maneuver: Ipopt's " << opt.derivative_test << " derivative test on the first mesh ..." << std::endl;
   // Ipopt would rewrite its output_file at each solve, keeping the last mesh-refinement
   // round only: freeflex collects the log of every round and writes it itself.
   for (auto it = opt.ipopt_options.begin(); it != opt.ipopt_options.end();) {

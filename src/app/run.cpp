@@ -70,6 +70,7 @@ void write_summary(const Design& design, RunResult& run, detail::RunOutput& out)
 void validate(const RunOptions& options) {
   if (options.out_dir.find('\0') != std::string::npos)
     throw std::invalid_argument("run options: out_dir contains a NUL character");
+  validate(options.plot);
 }
 
 RunResult run_design(const Design& design, const RunOptions& options) {
@@ -77,12 +78,14 @@ RunResult run_design(const Design& design, const RunOptions& options) {
   std::ostream* warnings = options.quiet ? nullptr : options.errors;
   std::optional<staging::StagedDirectory> dir;  // none: the results only, nothing is written
   if (!options.out_dir.empty()) dir.emplace(options.out_dir);
-  detail::RunOutput out(dir ? dir->staging() : "", warnings, options.out_dir);
+  detail::RunOutput out(dir ? dir->staging() : "", warnings, options.out_dir, options.plot);
   RunResult run;
+  // Messages name DIR, not the staging directory, which is gone by the time they are read.
+  const std::string kept = "; '" + options.out_dir + "' keeps the previous run's files";
   try {
     run_studies(design, options, run, out);
-  } catch (const IoError&) {
-    throw;  // before the commit the previous results stay as they were
+  } catch (const IoError& e) {
+    throw IoError(out.shown(e.what()) + kept);  // before the commit DIR is untouched
   } catch (const std::invalid_argument&) {
     throw;  // bad input found late: nothing is written (exit 2)
   } catch (const std::exception& e) {
@@ -96,14 +99,18 @@ RunResult run_design(const Design& design, const RunOptions& options) {
     run.warnings = out.warnings();
     return run;
   }
+  const std::string failed_before = run.ok() ? "" : "; the run had failed before: " + run.message;
   try {
     write_summary(design, run, out);
+  } catch (const IoError& e) {
+    throw IoError(out.shown(e.what()) + kept + failed_before);
+  }
+  try {
     const std::size_t n = dir->commit();
     if (options.log && !options.quiet)
       *options.log << "results: " << options.out_dir << " (" << n << " files, summary.json)\n";
   } catch (const IoError& e) {
-    if (run.ok()) throw;
-    throw IoError(std::string(e.what()) + "; the run had failed before: " + run.message);
+    throw IoError(out.shown(e.what()) + failed_before);
   }
   return run;
 }

@@ -41,6 +41,7 @@ Eigen::MatrixXd element_commands(const Excitation& ex, int elements, const Eigen
 SimulationOptions comparison_options(const Design& design) {
   SimulationOptions sim = design.simulation ? design.simulation->options : SimulationOptions{};
   sim.duration_s = design.controller->simulate_until_s;
+  sim.integrator.max_total_steps = integrator_step_budget(design.noa);  // the design's work bound
   if (!design.simulation) {
     sim.output_step_s = 0.005;
     sim.integrator.rtol = 1e-10;
@@ -103,6 +104,7 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
   }
   for (int k : bb.modes) {
     SwitchTimeOptions so;
+    so.max_steps_per_simulation = integrator_step_budget(design.noa);
     if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ... " << std::flush;
     ProgressReport progress(log, 0.0);
     so.progress = [&progress](int sims) { progress.note(std::to_string(sims) + " first-order simulations"); };

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <string>
@@ -28,6 +29,7 @@ struct Args {
   std::string design, out, format = "table", noa_text;
   int noa = 0;  ///< 0: the design's model.noa
   bool quiet = false;
+  PlotOptions plot;
 };
 
 /// --noa as a number of admissible functions; throws UsageError.
@@ -102,9 +104,25 @@ int cmd_modes(const Args& a, const Design& d) {
   return kExitOk;
 }
 
+/// The figures' gnuplot and its time limit: FREEFLEX_GNUPLOT (a path; empty: no figures
+/// drawn) and FREEFLEX_GNUPLOT_TIMEOUT_S override the defaults. Throws UsageError.
+PlotOptions plot_options_from_environment() {
+  PlotOptions o;
+  if (const char* g = std::getenv("FREEFLEX_GNUPLOT")) o.gnuplot = g;
+  if (const char* t = std::getenv("FREEFLEX_GNUPLOT_TIMEOUT_S")) {
+    char* end = nullptr;
+    const double v = std::strtod(t, &end);
+    if (*t == '\0' || *end != '\0' || !(v > 0.0 && v <= 3600.0))
+      throw UsageError{"FREEFLEX_GNUPLOT_TIMEOUT_S = '" + std::string(t) + "': must be a number of seconds in (0, 3600]"};
+    o.timeout_s = v;
+  }
+  return o;
+}
+
 int cmd_run(const Args& a, const Design& d) {
   RunOptions opt;
   opt.out_dir = a.out;
+  opt.plot = a.plot;
   opt.quiet = a.quiet;
   opt.log = &std::cout;
   opt.errors = &std::cerr;
@@ -144,6 +162,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (!args.noa_text.empty()) args.noa = parse_noa(args.noa_text);
+    args.plot = plot_options_from_environment();
   } catch (const UsageError& e) {
     std::cerr << "freeflex: " << e.message << '\n';
     return kExitBadInput;

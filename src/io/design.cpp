@@ -2,6 +2,7 @@
 // io/design_*.cpp), and what a design derives (force elements, excitation).
 #include "freeflex/io/design.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -61,6 +62,9 @@ Design parse_design(const std::string& text, const std::string& source) {
   Design d;
   d.source = source;
   d.title = root.string("title", false).value_or(d.title);
+  if (d.title.size() > lim::kMaxTitleBytes)  // it reaches every figure script and summary.json
+    root.problem("title", "title is " + std::to_string(d.title.size()) + " bytes long; at most " +
+                              std::to_string(lim::kMaxTitleBytes) + " (it is printed on every figure)");
   io_detail::read_model(root, d);
   io_detail::read_beam(root, d);
   Section out = root.table("output");
@@ -86,6 +90,11 @@ Design parse_design(const std::string& text, const std::string& source) {
   }
   if (!problems.empty()) throw DesignError(problems.list());
   return d;
+}
+
+long integrator_step_budget(int noa) {
+  const double n = 3.0 + noa;
+  return static_cast<long>(lim::kMaxIntegratorWork / std::max(n * n, 400.0));
 }
 
 Design load_design(const std::string& path) {

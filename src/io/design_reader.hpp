@@ -30,9 +30,14 @@ class Problems {
   bool empty() const { return list_.empty(); }
   const std::vector<std::string>& list() const { return list_; }
   const std::string& source() const { return source_; }
+  /// Marks a key (dotted path) whose value was rejected: what depends on it is not checked.
+  void mark(const std::string& key_path) { troubled_.insert(key_path); }
+  /// True if `key_path` or a table that holds it was marked.
+  bool troubled(const std::string& key_path) const;
 
  private:
   std::string source_;
+  std::set<std::string> troubled_;
   std::vector<std::string> list_;
   std::vector<int> lines_;  // line of each problem, for file order
 };
@@ -93,10 +98,18 @@ class Section {
   std::optional<std::vector<long long>> integer_array(const std::string& key, long long lo, long long hi,
                                                       bool required);
   std::optional<std::vector<std::string>> string_array(const std::string& key, bool required);
-  /// Every entry of this table as (key, value text), for options passed through to a
-  /// library (strings as written, numbers in full precision, booleans as yes/no).
-  /// Nested tables and arrays are problems.
-  std::vector<std::pair<std::string, std::string>> raw_entries();
+  /// An entry of a table passed through to a library: its key, its value as text (strings
+  /// as written, numbers in full precision, booleans as yes/no), how it was written, and
+  /// its line.
+  struct RawEntry {
+    enum class Kind { String, Integer, Float, Boolean };
+    std::string key, text;
+    Kind kind;
+    int line;
+  };
+  /// Every entry of this table, in file order. Nested tables, arrays and non-finite numbers
+  /// are problems.
+  std::vector<RawEntry> raw_entries();
   std::optional<std::vector<double>> number_array(const std::string& key, const Range& range,
                                                   bool required);
   /// A number, or [start, end]: two numbers (a property varying linearly along a piece).

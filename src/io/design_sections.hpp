@@ -86,6 +86,8 @@ bool check_count(Section& s, const std::string& key, const std::string& lead, co
 
 /// `s` without surrounding blanks, in lower case (how Ipopt compares string option values).
 std::string lower_trimmed(const std::string& s);
+/// `s` without surrounding blanks (how Ipopt reads a value).
+std::string trimmed(const std::string& s);
 
 /// Total length of the design's beam (0 while it has no valid segment).
 double beam_length(const Design& d);

@@ -12,6 +12,7 @@
 #include "freeflex/app/progress.hpp"
 #include "freeflex/app/studies.hpp"
 #include "freeflex/io/design.hpp"
+#include "freeflex/io/plot.hpp"
 
 namespace freeflex {
 
@@ -29,10 +30,11 @@ struct RunOptions {
   bool quiet = false;              ///< no progress, tables or warnings on the streams below
   std::ostream* log = nullptr;     ///< progress, tables and the closing line; null: silent
   std::ostream* errors = nullptr;  ///< warnings as they happen; null: silent
+  PlotOptions plot;                ///< the gnuplot run for figures, and its time limit per figure
 };
 
-/// Throws std::invalid_argument for an out_dir no file system accepts; the defaults (no
-/// directory: results only) are valid.
+/// Throws std::invalid_argument for an out_dir no file system accepts or bad plot
+/// options; the defaults (no directory: results only) are valid.
 void validate(const RunOptions& options);
 
 /// Everything a run did: each study's typed result, the files written (summary.json

@@ -20,16 +20,41 @@
 
 namespace freeflex {
 
-/// Limits on what a design may ask for (README "design keys"). They are generous: they
-/// catch typos and absurd magnitudes before any work, and bound every count a design
-/// derives (rows, samples, grid points) so that no run can exhaust memory.
+/// Limits on what a design may ask for (README "design keys", the "(limits)" row). They
+/// are generous: they catch typos and absurd magnitudes before any work, and bound every
+/// count and size a design implies (rows, files, text, sweep entries, mode shapes, the
+/// work of each study) so that no run can exhaust memory or run unbounded.
 namespace design_limits {
 inline constexpr std::size_t kMaxFileBytes = 1 << 20;     ///< a design file: 1 MiB
+inline constexpr std::size_t kMaxTitleBytes = 256;        ///< the title (it reaches every figure)
 inline constexpr double kMaxTime_s = 1e6;                 ///< any time, duration or horizon
 inline constexpr double kMinDuration_s = 1e-6;            ///< any duration or horizon
-inline constexpr double kMaxOutputRows = 200000;          ///< output rows per series, TV-LQR grid points
+inline constexpr double kMaxOutputRows = 200000;          ///< rows of one output series, TV-LQR grid points
 inline constexpr double kMaxTrajectorySamples = 1000000;  ///< samples of the zero-order motion
+inline constexpr int kMaxForceElements = 64;              ///< [[load]] and [[actuator]] tables together
+inline constexpr std::size_t kMaxProfileTimes = 10000;    ///< times_s entries of all load profiles
+inline constexpr int kMaxNoaSweep = 100;                  ///< entries of free_vibration.noa_sweep
+inline constexpr int kMaxModeShapes = 20;                 ///< [[free_vibration.mode_shape]] tables
+inline constexpr int kMaxModeShapePoints = 100000;        ///< points of one mode shape
+inline constexpr double kMaxModeShapeRows = 200000;       ///< points of all mode shapes together
 inline constexpr int kMaxIntervals = 5000;                ///< collocation intervals (trajopt's max_intervals)
+inline constexpr int kMaxMeshRefinements = 20;            ///< mesh-refinement rounds
+inline constexpr long kMaxIterations = 1000000;           ///< Ipopt max_iter (either key)
+/// Ipopt iterations x NLP unknowns, summed over the mesh-refinement rounds (each round's
+/// mesh at most doubles, up to kMaxIntervals): the optimizer's work, 3.2 to 4 µs of CPU
+/// per unit (measured: 20 and 24 iterations on 5000 intervals, 70 007 unknowns: 4.5 s and
+/// 6.7 s), so about 3 min at the bound.
+inline constexpr double kMaxIpoptWork = 4.5e7;
+/// NLP unknowns Ipopt's derivative checker may test: its work grows like n³ for the
+/// first-order test and faster (about n^3.8) for the second-order ones. At these sizes
+/// each takes about 15 s of CPU (docs: README, the "(limits)" row).
+inline constexpr double kMaxDerivativeTestUnknowns = 2000;
+inline constexpr double kMaxSecondOrderTestUnknowns = 400;
+/// Doubles of the TV-LQR's stored gains: grid points x actuators x 2 (3 + noa) (400 MB).
+inline constexpr double kMaxGainStorage = 5e7;
+/// Work of one integration (simulation, comparison run, switch-time simulation): CVODES
+/// steps x max(n², 400), n = 3 + model.noa; integrator_step_budget() turns it into steps.
+inline constexpr double kMaxIntegratorWork = 2e9;
 inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
 inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
 inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;
@@ -149,6 +174,9 @@ struct Design {
   /// basis with `noa` functions, its force elements and damping.
   FlexibleBody body() const;
 };
+
+/// CVODES steps one integration may take at model.noa = `noa` (kMaxIntegratorWork).
+long integrator_step_budget(int noa);
 
 /// Reads and validates a design file. Throws DesignError (bad content, unreadable file,
 /// not a regular file, larger than design_limits::kMaxFileBytes).
