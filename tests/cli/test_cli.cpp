@@ -110,7 +110,8 @@ TEST_CASE("run on the paper's force pulse writes both responses and their differ
     CHECK(read(out + f).rfind("t,Rx,Ry,theta,q1,q2,q3,q4,q5,q6,", 0) == 0);
   const std::string summary = read(out + "/summary.json");
   for (const char* key : {"\"max_abs_dq\"", "\"max_rigid_difference\"", "\"residual_vibration_energy_J\"",
-                          "\"energy_drift_rel\"", "\"linear_momentum_drift_rel\"", "\"angular_momentum_drift_rel\""})
+                          "\"energy_drift_rel\"", "\"linear_momentum_drift_rel\"", "\"angular_momentum_drift_rel\"",
+                          "\"global_error_estimate\"", "\"max_abs_theta_rad\"", "\"max_abs_q\""})
     CHECK_THAT(summary, Contains(key));
 }
 
