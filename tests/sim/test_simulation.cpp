@@ -269,4 +269,8 @@ TEST_CASE("compare_runs reports a failed or mismatched second run as unavailable
   CHECK(e.q == 2e-4);
   CHECK(e.R_m == 0.0);
   CHECK(e.worst_time_s == 0.5);
+  b.z_dot(2, 0) = std::nan("");  // never an estimate from a non-finite difference
+  e = compare_runs(a, b, o);
+  CHECK_FALSE(e.available);
+  CHECK(e.message.find("not finite") != std::string::npos);
 }
