@@ -76,6 +76,52 @@ void fail(SimulationStudyResult& r, const StudyLog& study_log, const std::string
   if (study_log.warn) study_log.warn(why);
 }
 
+/// The second run of the error estimate, its line in the log and, when the estimate is a
+/// sizeable part of the motion, a warning that the result is not converged.
+template <class Simulate>
+GlobalErrorEstimate estimate_error(const char* what, const SimulationResult& run, const SimulationOptions& options,
+                                   Simulate simulate, SimulationStudyResult& r, const StudyLog& study_log) {
+  std::ostream* log = study_log.log;
+  const SimulationOptions tight = error_reference_options(options);
+  if (log) *log << "  error estimate: " << what;
+  GlobalErrorEstimate e;
+  if (tight.integrator.rtol < options.integrator.rtol) {
+    if (log) *log << " again at rtol " << tight.integrator.rtol << " ... " << std::flush;
+    e = compare_runs(run, simulate(tight), tight);
+  } else {
+    e.rtol = tight.integrator.rtol;
+    e.atol = tight.integrator.atol;
+    e.message = "rtol is at the floor of 1e-14: no tighter run to compare with";
+  }
+  if (!e.available) {
+    if (log) *log << " not available (" << e.message << ")\n";
+    const std::string w = std::string(what) + ": no global error estimate: " + e.message;
+    r.warnings.push_back(w);
+    if (study_log.warn) study_log.warn(w);
+    return e;
+  }
+  if (log)
+    *log << std::setprecision(2) << "theta " << e.theta_rad << " rad, R " << e.R_m << " m, q " << e.q << " (worst at "
+         << std::setprecision(4) << e.worst_time_s << " s; " << std::fixed << std::setprecision(3) << e.wall_time_s
+         << " s)" << std::defaultfloat << std::setprecision(6) << '\n';
+  // Not converged: an error of 1% of the largest excursion of R or q, or of 0.01 rad in θ;
+  // an error below 100 atol (the design's own scale of an insignificant error) never is,
+  // so that a coordinate that stays at zero up to round-off raises nothing.
+  const double R_peak = run.z.leftCols(2).cwiseAbs().maxCoeff();
+  const double q_peak = run.z.cols() > 3 ? run.z.rightCols(run.z.cols() - 3).cwiseAbs().maxCoeff() : 0.0;
+  const double floor = 100.0 * options.integrator.atol;
+  auto sizeable = [floor](double err, double peak) { return err > floor && err > 1e-2 * peak; };
+  if (e.theta_rad > 1e-2 || sizeable(e.R_m, R_peak) || sizeable(e.q, q_peak)) {
+    std::ostringstream w;
+    w << std::setprecision(2) << what << ": not converged: the estimated global error reaches theta " << e.theta_rad
+      << " rad, R " << e.R_m << " m (peak " << R_peak << "), q " << e.q << " (peak " << q_peak << ") near t = "
+      << std::setprecision(4) << e.worst_time_s << " s; lower rtol (see README, [simulation])";
+    r.warnings.push_back(w.str());
+    if (study_log.warn) study_log.warn(w.str());
+  }
+  return e;
+}
+
 }  // namespace
 
 SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver,
@@ -121,6 +167,10 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       const double H = std::max(nl_table.col(ce + 4).cwiseAbs().maxCoeff(), std::sqrt(2 * mi.I_o * E));
       s.drifts = Eigen::Vector3d(drift(nl_table, ce + 1, 1, t_off, E), drift(nl_table, ce + 2, 2, t_off, P),
                                  drift(nl_table, ce + 4, 1, t_off, H));
+      if (st.error_estimate)
+        s.error_estimate = estimate_error(
+            "full nonlinear model", nl, st.options,
+            [&](const SimulationOptions& tight) { return simulate_full(body, ex, tight); }, r, study_log);
     } else {
       fail(r, study_log, "full nonlinear simulation failed: " + nl.message);
     }
@@ -143,6 +193,14 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     if (pt.ok()) {
       s.table = response_table(body, pt, nullptr, s.header);
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
+      if (st.error_estimate)
+        s.error_estimate = estimate_error(
+            "perturbation solution", pt, st.options,
+            [&](const SimulationOptions& tight) {
+              return (nominal ? simulate_perturbation_about(body, ex, nominal, tight)
+                              : simulate_perturbation(body, ex, tight)).total;
+            },
+            r, study_log);
     } else {
       fail(r, study_log, "perturbation simulation failed: " + pt.message);
     }
@@ -211,6 +269,24 @@ Json run_stats(const SimulationStudyResult::Solution& s) {
   j["rhs_evaluations"] = r.rhs_evaluations;
   j["steps"] = r.steps;
   j["wall_time_s"] = r.wall_time_s;
+  if (const auto& e = s.error_estimate) {
+    Json g = Json::object();
+    g["method"] = "second run at rtol/10, atol/10; max difference over the output times";
+    g["available"] = e->available;
+    if (!e->available) g["message"] = e->message;
+    g["rtol"] = e->rtol;
+    g["atol"] = e->atol;
+    if (e->available) {
+      g["max_abs_R_m"] = e->R_m;
+      g["max_abs_theta_rad"] = e->theta_rad;
+      g["max_abs_q"] = e->q;
+      g["max_abs_rates"] = e->rates;
+      g["worst_time_s"] = e->worst_time_s;
+    }
+    g["rhs_evaluations"] = e->rhs_evaluations;
+    g["wall_time_s"] = e->wall_time_s;
+    j["global_error_estimate"] = g;
+  }
   return j;
 }
 }  // namespace

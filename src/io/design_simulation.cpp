@@ -37,6 +37,7 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
       s.enumerated<SimulationOptions::Variables>("first_order_variables", false).value_or(o.first_order_variables);
   st.nonlinear = s.boolean("nonlinear", false).value_or(st.nonlinear);
   st.perturbation = s.boolean("perturbation", false).value_or(st.perturbation);
+  st.error_estimate = s.boolean("error_estimate", false).value_or(st.error_estimate);
   if (dur) report_field_problems(s, problems(o), {{"duration_s", "duration_s"},
                                                   {"output_step_s", "output_step_s"},
                                                   {"trajectory_step_s", "trajectory_step_s"},

@@ -96,14 +96,18 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
   // defaults: modal variables for the first-order model, physical for the full one
   CHECK(d.simulation->options.first_order_variables == SimulationOptions::Variables::Modal);
   CHECK(d.simulation->options.full_variables == SimulationOptions::Variables::Physical);
+  CHECK(d.simulation->error_estimate);  // on by default
   CHECK(d.force_elements().size() == 2);
   const Design swapped = parse_design(kPaperBeam + kLoad +
                                           "[simulation]\nduration_s = 2.0\nfull_model_variables = \"modal\"\n"
-                                          "first_order_variables = \"physical\"\n",
+                                          "first_order_variables = \"physical\"\nerror_estimate = false\n",
                                       "t.toml");
   REQUIRE(swapped.simulation);
   CHECK(swapped.simulation->options.full_variables == SimulationOptions::Variables::Modal);
   CHECK(swapped.simulation->options.first_order_variables == SimulationOptions::Variables::Physical);
+  CHECK_FALSE(swapped.simulation->error_estimate);
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nerror_estimate = 1\n"),
+             Contains("error_estimate"));
 }
 
 TEST_CASE("bad loads and tolerances name key and line", "[io]") {

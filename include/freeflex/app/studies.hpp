@@ -122,6 +122,9 @@ struct SimulationStudyResult {
     /// Full model: drift of energy, linear and angular momentum after the loads end,
     /// relative to their peaks.
     std::optional<Eigen::Vector3d> drifts;
+    /// Its global integration error, from a second run at tighter tolerances
+    /// ([simulation] error_estimate; absent when switched off or the run failed).
+    std::optional<GlobalErrorEstimate> error_estimate;
   };
   std::optional<Solution> nonlinear, perturbation;
   struct Differences {

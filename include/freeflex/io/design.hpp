@@ -115,6 +115,9 @@ struct SimulationStudy {
   SimulationOptions options;
   bool nonlinear = true;
   bool perturbation = true;
+  /// Run every simulation a second time at tolerances 100 times tighter and report the
+  /// difference as the estimate of its global error (GlobalErrorEstimate).
+  bool error_estimate = true;
   std::string rigid_figure = "rigid_motion";
   std::string elastic_figure = "generalized_displacements";
 };
