@@ -1,6 +1,7 @@
 // Sensors, the exact discretization of the first-order model between samples, and the
 // time-varying Kalman filter (control/lqg.hpp, docs/theory.md section 12).
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -204,6 +205,59 @@ double NormalStream::next() {
   spare_ = r * std::sin(a);
   have_spare_ = true;
   return r * std::cos(a);
+}
+
+}  // namespace freeflex
+
+namespace freeflex {
+
+TvlqrResult solve_discrete_tvlqr(const DiscreteLtv& dm, const Eigen::MatrixXd& Q, const Eigen::MatrixXd& R,
+                                 const Eigen::MatrixXd& Qf) {
+  const std::string where = "solve_discrete_tvlqr";
+  if (!dm.ok() || dm.Phi.empty()) throw std::invalid_argument(where + ": the discrete model was not computed");
+  const int n = static_cast<int>(dm.Phi.front().rows()), m = static_cast<int>(dm.Gamma.front().cols());
+  check_positive_semidefinite(Q, n, "Q", where);
+  check_positive_semidefinite(Qf, n, "Qf", where);
+  check_positive_definite(R, m, "R", where);
+  const auto clock0 = std::chrono::steady_clock::now();
+  const std::size_t K = dm.Phi.size();
+  TvlqrResult r;
+  r.t = dm.t;
+  r.K.assign(K + 1, Eigen::MatrixXd::Zero(m, n));
+  r.feedforward = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(K + 1), m);
+  r.Qf = Qf;
+  Eigen::MatrixXd P = Qf;
+  Eigen::VectorXd s = Eigen::VectorXd::Zero(n);
+  for (std::size_t j = K; j-- > 0;) {
+    const double Ts = dm.t[j + 1] - dm.t[j];
+    const Eigen::MatrixXd& Phi = dm.Phi[j];
+    const Eigen::MatrixXd& G = dm.Gamma[j];
+    const Eigen::MatrixXd PG = P * G;
+    const Eigen::MatrixXd S = R * Ts + G.transpose() * PG;
+    const Eigen::LLT<Eigen::MatrixXd> llt(S);
+    const Eigen::MatrixXd Kk = llt.solve(PG.transpose() * Phi);
+    const Eigen::VectorXd Pd_s = P * dm.d[j] + s;
+    r.K[j] = Kk;
+    r.feedforward.row(static_cast<Eigen::Index>(j)) = (-llt.solve(G.transpose() * Pd_s)).transpose();
+    const Eigen::MatrixXd Acl = Phi - G * Kk;
+    s = Acl.transpose() * Pd_s;  // eq. 12.5
+    P = Q * Ts + Phi.transpose() * P * Acl;
+    P = 0.5 * (P + P.transpose());
+    if (!P.allFinite()) {
+      r.status = TvlqrResult::Status::IntegrationFailed;
+      r.message = "the discrete Riccati recursion is not finite at t = " + std::to_string(dm.t[j]) + " s";
+      return r;
+    }
+  }
+  r.K[K] = r.K[K - 1];  // the last sample holds the previous gain (no interval follows it)
+  r.feedforward.row(static_cast<Eigen::Index>(K)) = r.feedforward.row(static_cast<Eigen::Index>(K - 1));
+  r.P0 = P;
+  r.s0 = s;
+  r.steps = static_cast<long>(K);
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+  r.status = TvlqrResult::Status::Solved;
+  r.message = "solved";
+  return r;
 }
 
 }  // namespace freeflex

@@ -11,6 +11,7 @@
 
 #include "freeflex/app/progress.hpp"
 #include "freeflex/app/studies.hpp"
+#include "freeflex/app/sweep.hpp"
 #include "freeflex/io/design.hpp"
 
 namespace freeflex {
@@ -29,6 +30,9 @@ struct RunOptions {
   bool quiet = false;              ///< no progress, tables or warnings on the streams below
   std::ostream* log = nullptr;     ///< progress, tables and the closing line; null: silent
   std::ostream* errors = nullptr;  ///< warnings as they happen; null: silent
+  /// [sweep]: threads, MPI share; an empty journal means out_dir/.freeflex-sweep-journal
+  /// (kept until the run's files are committed, so that a killed sweep resumes).
+  SweepExecution sweep;
 };
 
 /// Throws std::invalid_argument for an out_dir no file system accepts; the defaults (no
@@ -47,6 +51,8 @@ struct RunResult {
   std::optional<ManeuverStudyResult> maneuver;
   std::optional<SimulationStudyResult> simulation;
   std::optional<SuppressionStudyResult> suppression;
+  std::optional<LqgStudyResult> lqg;
+  std::optional<SweepStudyResult> sweep;
   std::vector<std::string> files;
   std::vector<std::string> warnings;
 };
