@@ -108,10 +108,11 @@ std::vector<double> sample_times(double t0, double tf, double sample_rate_hz);
 /// model (the continuous cost sampled), by the backward Riccati recursion
 ///   K_k = (R T_s + Γᵀ P Γ)⁻¹ Γᵀ P Φ,  P_k = Q T_s + Φᵀ P (Φ − Γ K_k),
 ///   u_ff,k = −(R T_s + Γᵀ P Γ)⁻¹ Γᵀ (P d + s),  s_k = (Φ − Γ K_k)ᵀ (P d + s),
-/// with P = P_{k+1}, s = s_{k+1}. Unlike the continuous law sampled, it stays stabilizing
-/// at any sample rate (the continuous law's fastest closed-loop poles, −8.6e3 1/s on the
-/// paper's beam, lie far beyond a 1 kHz sampler's reach). The result's grid is the sample
-/// times (gain(t) is exact at them). Throws std::invalid_argument for sizes that do not
+/// with P = P_{k+1}, s = s_{k+1}: the optimal law for commands that are held, where the
+/// continuous law's gains read at the samples are an approximation that degrades as the
+/// sample rate nears its closed-loop bandwidth (its fastest poles, −8.6e3 1/s on the
+/// paper's beam, are beyond any practical sampler). The result's grid is the sample times
+/// (gain(t) is exact at them). Throws std::invalid_argument for sizes that do not
 /// match, Q or Qf not PSD, R not PD.
 TvlqrResult solve_discrete_tvlqr(const DiscreteLtv& model, const Eigen::MatrixXd& Q, const Eigen::MatrixXd& R,
                                  const Eigen::MatrixXd& Qf);
