@@ -19,13 +19,21 @@
 
 #include "app/sweep_files.hpp"
 #include "freeflex/io/output.hpp"
+#include "freeflex/version.hpp"
 #include "freeflex/control/lqr.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
 namespace {
 
-std::string num(double v) { return util::format_number(v, 10); }
+/// Marks a study failed for `why`, keeping it among its warnings and reporting it.
+template <class R>
+void fail_study(R& r, const StudyLog& log, const std::string& why) {
+  r.status = StudyStatus::Failed;
+  r.message = r.message.empty() ? why : r.message + "; " + why;
+  r.warnings.push_back(why);
+  if (log.warn) log.warn(why);
+}
 
 }  // namespace
 
@@ -36,21 +44,7 @@ Flight::Flight(const Design& design, const SuppressionStudyResult& suppression, 
       loads(design.excitation()),
       nominal(suppression.chain.nominal) {
   const ControllerStudy& st = *design.controller;
-  if (maneuver && maneuver->flown) {  // u0: the maneuver's commands on its actuators (as suppress_vibration)
-    const FlownManeuver& m = *maneuver->flown;
-    std::vector<int> slot;
-    for (int a : m.actuators)
-      slot.push_back(static_cast<int>(std::find(st.actuators.begin(), st.actuators.end(), a) - st.actuators.begin()));
-    const auto commands = m.commands;
-    const double end = m.duration_s;
-    u0 = [commands, slot, end](const Instant& at, Eigen::Ref<Eigen::VectorXd> u) {
-      u.setZero();
-      if (at.piece_mid > end) return;
-      Eigen::VectorXd c(static_cast<Eigen::Index>(slot.size()));
-      commands(at, c);
-      for (std::size_t k = 0; k < slot.size(); ++k) u(slot[k]) = c(static_cast<Eigen::Index>(k));
-    };
-  }
+  if (maneuver && maneuver->flown) u0 = maneuver_actuator_commands(*maneuver->flown, st.actuators);  // as suppress_vibration
   model = std::make_unique<FirstOrderModel>(body, *nominal, nominal_element_commands(loads, st.actuators, u0),
                                             st.actuators);
 }
@@ -100,12 +94,7 @@ LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult&
                              const ManeuverStudyResult* maneuver, const StudyLog& log) {
   LqgStudyResult r;
   const LqgStudy& lq = *design.lqg;
-  auto fail = [&](const std::string& why) {
-    r.status = StudyStatus::Failed;
-    r.message = r.message.empty() ? why : r.message + "; " + why;
-    r.warnings.push_back(why);
-    if (log.warn) log.warn(why);
-  };
+  auto fail = [&](const std::string& why) { fail_study(r, log, why); };
   if (!suppression.chain.law.ok() || !suppression.chain.nominal) {
     fail("[lqg]: the [controller]'s TV-LQR is not available (" + suppression.chain.message + ")");
     return r;
@@ -121,7 +110,6 @@ LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult&
     fail("[lqg]: the Kalman filter failed: " + r.filter.message);
     return r;
   }
-  const int N = f.body.dofs();
   r.final_elastic_std = r.filter.P_post.back().diagonal().segment(3, f.body.n()).cwiseSqrt();
   SampledLoopOptions so;
   so.sample_rate_hz = lq.sample_rate_hz;
@@ -157,11 +145,9 @@ LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult&
       fail("[lqg]: " + name + ": " + c.run.message);
       continue;
     }
-    Eigen::MatrixXd commands = Eigen::MatrixXd::Zero(c.run.t.size(), 0);
     c.metrics = response_metrics(f.body, c.run.t, c.run.z, c.run.z_dot, c.run.commands, tg);
     r.cases.push_back(std::move(c));
   }
-  (void)N;
   if (log.log) {
     *log.log << "  case               E_vib(end) [J]  mean, last 1 s [J]\n";
     *log.log << "  open_loop          " << std::setw(14) << std::setprecision(4) << r.open_loop_energy_J << '\n';
@@ -216,7 +202,7 @@ std::string journal_header(const Design& d) {
   char buf[128];
   std::snprintf(buf, sizeof buf, "freeflex sweep journal 1 design %016" PRIx64 " samples %ld", d.digest,
                 d.sweep->total_samples());
-  return buf;
+  return std::string(buf) + " freeflex " + version();  // another version may compute other bits
 }
 
 std::string journal_line(const SweepSample& s) {
@@ -305,12 +291,7 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
   const SweepStudy& sw = *design.sweep;
   SweepStudyResult r;
   for (const SweepParameter& p : sw.parameters) r.parameter_names.push_back(to_string(p.name));
-  auto fail = [&](const std::string& why) {
-    r.status = StudyStatus::Failed;
-    r.message = r.message.empty() ? why : r.message + "; " + why;
-    r.warnings.push_back(why);
-    if (log.warn) log.warn(why);
-  };
+  auto fail = [&](const std::string& why) { fail_study(r, log, why); };
   if (!suppression.chain.law.ok() || !suppression.chain.nominal) {
     fail("[sweep]: the [controller]'s TV-LQR is not available (" + suppression.chain.message + ")");
     return r;

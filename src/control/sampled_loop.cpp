@@ -154,6 +154,16 @@ SampledLoopResult simulate_sampled_loop(const FlexibleBody& plant, const FirstOr
   Eigen::VectorXd xhat = Eigen::VectorXd::Zero(nx);  // prior estimate of x1 at the current sample
   std::vector<Eigen::VectorXd> u1_sent;               // u1 of each sample, for the filter
   std::vector<double> cuts = loads.breakpoints();
+  // The perturbation input acting over [t_j, t_{j+1}] as the filter knows it: the command
+  // sent delay_samples before (with an unknown delay, 0: the one just sent), and before
+  // the first arrives nothing, i.e. −u0.
+  auto acting_u1 = [&](int j) -> Eigen::VectorXd {
+    const int src = j - delay_samples;
+    if (src >= 0) return u1_sent[static_cast<std::size_t>(src)];
+    Eigen::VectorXd u = Eigen::VectorXd::Zero(m);
+    if (u0) u0(Instant::at(ts[static_cast<std::size_t>(j)]), u);
+    return -u;
+  };
   int row = 0;
   for (int k = 0; k <= K; ++k) {
     const double t = ts[static_cast<std::size_t>(k)];
@@ -172,8 +182,7 @@ SampledLoopResult simulate_sampled_loop(const FlexibleBody& plant, const FirstOr
     Eigen::VectorXd x_act = x_fb;
     if (delay_samples > 0) {
       for (int j = k; j < k + delay_samples && j < K; ++j) {
-        const int src = j - delay_samples;  // the command acting over [t_j, t_{j+1}]
-        const Eigen::VectorXd u = src >= 0 ? u1_sent[static_cast<std::size_t>(src)] : Eigen::VectorXd::Zero(m);
+        const Eigen::VectorXd u = acting_u1(j);  // the command acting over [t_j, t_{j+1}]
         x_act = filter->predict(j, x_act, u);
         k_act = j + 1;
       }
@@ -197,9 +206,7 @@ SampledLoopResult simulate_sampled_loop(const FlexibleBody& plant, const FirstOr
     if (k == K) break;
     if (lqg) {
       // the perturbation input over [t_k, t_{k+1}] as the filter knows it
-      const int src = k - delay_samples;
-      const Eigen::VectorXd u = src >= 0 ? u1_sent[static_cast<std::size_t>(src)] : Eigen::VectorXd::Zero(m);
-      xhat = filter->predict(k, xhat, u);
+      xhat = filter->predict(k, xhat, acting_u1(k));
     }
     const double t1 = ts[static_cast<std::size_t>(k + 1)];
     std::vector<double> piece_cuts;

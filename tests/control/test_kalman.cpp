@@ -6,31 +6,38 @@
 
 #include <cmath>
 #include <iostream>
+#include <memory>
 
 #include "freeflex/control/closed_loop.hpp"
 #include "freeflex/control/lqg.hpp"
 #include "freeflex/control/lqr.hpp"
 #include "freeflex/control/metrics.hpp"
 #include "freeflex/sim/simulate.hpp"
+#include "support/bodies.hpp"
 
 using namespace freeflex;
 
 namespace {
 
-FlexibleBody moment_body(int noa) {
-  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
-  return FlexibleBody(beam, noa,
-                      {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                       {"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                       {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}},
-                      {0.01, 0.01});
-}
+FlexibleBody moment_body(int noa) { return freeflex_test::moment_body(noa, {0.01, 0.01}); }
+using freeflex_test::moment_loads;
 
-Excitation moment_loads() {
-  return Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt,
-                     std::nullopt}};
-}
+/// The moment example's first-order model about its nominal motion over [0, until_s],
+/// with the hub torque and both thrusters as inputs (the models refer to the members).
+struct MomentModel {
+  MomentModel(int noa, double until_s) : body(moment_body(noa)), loads(moment_loads()) {
+    SimulationOptions so;
+    so.duration_s = until_s;
+    pert = simulate_perturbation(body, loads, so);
+    REQUIRE(pert.total.ok());
+    model = std::make_unique<FirstOrderModel>(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
+  }
+  FlexibleBody body;
+  Excitation loads;
+  std::vector<int> inputs{1, 2, 3};
+  PerturbationResult pert;
+  std::unique_ptr<FirstOrderModel> model;
+};
 
 /// Wilson–Hilferty: the p-quantile of chi-square with k degrees of freedom (relative
 /// error < 1e-4 for k > 100; here k = 2000).
@@ -42,14 +49,9 @@ double chi2_quantile(double k, double z_p) {
 }  // namespace
 
 TEST_CASE("Kalman filter: NEES of 200 Monte Carlo runs within the 95% chi-square bounds", "[control][kalman]") {
-  const FlexibleBody body = moment_body(2);
-  const Excitation loads = moment_loads();
-  SimulationOptions so;
-  so.duration_s = 1.5;
-  const PerturbationResult pert = simulate_perturbation(body, loads, so);
-  REQUIRE(pert.total.ok());
-  const std::vector<int> inputs{1, 2, 3};
-  const FirstOrderModel model(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
+  const MomentModel mm(2, 1.5);
+  const FlexibleBody& body = mm.body;
+  const FirstOrderModel& model = *mm.model;
   const LtvSystem sys = ltv_system(model);
   const int n = model.state_size(), m = model.input_size();
 
@@ -164,16 +166,14 @@ TEST_CASE("LQG on the full model: a gyro and two strain gauges come close to the
   // The moment example at NOA 4 with a hub torque and two tip thrusters; the TV-LQR's
   // weights of test_closed_loop.cpp, flown as a 500 Hz digital law with the exact state
   // and with the Kalman filter's estimate, seeded noise on the sensors and actuators.
-  const FlexibleBody body = moment_body(4);
-  const Excitation loads = moment_loads();
+  const MomentModel mm(4, 3.0);
+  const FlexibleBody& body = mm.body;
+  const Excitation& loads = mm.loads;
+  const FirstOrderModel& model = *mm.model;
   SimulationOptions so;
   so.duration_s = 3.0;
-  const PerturbationResult pert = simulate_perturbation(body, loads, so);
   const SimulationResult open = simulate_full(body, loads, so);
-  REQUIRE(pert.total.ok());
   REQUIRE(open.ok());
-  const std::vector<int> inputs{1, 2, 3};
-  const FirstOrderModel model(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
   const Eigen::Vector3d limits(1.0, 2.0, 2.0);
   const Eigen::MatrixXd R = limits.cwiseInverse().cwiseAbs2().asDiagonal();
   const Eigen::MatrixXd Q = vibration_weight(body, 1.0, 10.0, 1.0);
@@ -227,14 +227,9 @@ TEST_CASE("observability: which sensors see which modes (the filter's 1σ at the
   // filtering at 200 Hz from a prior of 1e-3 on every coordinate, process noise on the
   // hub torque and the thrusters. A coordinate no sensor sees keeps (or grows) its prior;
   // one a sensor sees falls to the sensor's noise level.
-  const FlexibleBody body = moment_body(4);
-  const Excitation loads = moment_loads();
-  SimulationOptions so;
-  so.duration_s = 1.5;
-  const PerturbationResult pert = simulate_perturbation(body, loads, so);
-  REQUIRE(pert.total.ok());
-  const std::vector<int> inputs{1, 2, 3};
-  const FirstOrderModel model(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
+  const MomentModel mm(4, 1.5);
+  const FlexibleBody& body = mm.body;
+  const FirstOrderModel& model = *mm.model;
   const int n = model.state_size();
   const double fs = 200.0;
   const Eigen::MatrixXd W = Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();
