@@ -38,6 +38,7 @@
 #include "freeflex/trajopt/trajectory.hpp"
 
 #include "freeflex/control/closed_loop.hpp"
+#include "freeflex/control/lqg.hpp"
 #include "freeflex/control/lqr.hpp"
 #include "freeflex/control/lyapunov.hpp"
 #include "freeflex/control/metrics.hpp"
@@ -52,3 +53,4 @@
 #include "freeflex/app/progress.hpp"
 #include "freeflex/app/run.hpp"
 #include "freeflex/app/studies.hpp"
+#include "freeflex/app/sweep.hpp"

@@ -2,9 +2,11 @@
 // controller fly it), their files through a staged output directory, summary.json last.
 #include "freeflex/app/run.hpp"
 
+#include <cstdio>
 #include <stdexcept>
 
 #include "app/study_files.hpp"
+#include "app/sweep_files.hpp"
 #include "freeflex/io/output.hpp"
 #include "freeflex/version.hpp"
 #include "io/staging.hpp"
@@ -52,6 +54,18 @@ void run_studies(const Design& design, const RunOptions& options, RunResult& run
     detail::write_suppression(design, *run.suppression, out);
     note(run, *run.suppression);
     any = true;
+  }
+  if (design.lqg && run.suppression) {
+    run.lqg = run_lqg_study(design, *run.suppression, maneuver, study_log);
+    detail::write_lqg(design, *run.lqg, out);
+    note(run, *run.lqg);
+  }
+  if (design.sweep && run.suppression) {
+    SweepExecution ex = options.sweep;
+    if (ex.journal.empty() && !options.out_dir.empty()) ex.journal = options.out_dir + "/.freeflex-sweep-journal";
+    run.sweep = run_sweep_study(design, *run.suppression, maneuver, ex, study_log);
+    detail::write_sweep(design, *run.sweep, out);
+    note(run, *run.sweep);
   }
   if (!any) out.warn("the design asks for no study; add [free_vibration] or [simulation] (see README, design keys)");
 }
@@ -107,6 +121,7 @@ RunResult run_design(const Design& design, const RunOptions& options) {
   }
   try {
     const std::size_t n = dir->commit();
+    if (run.sweep && options.sweep.journal.empty()) std::remove((options.out_dir + "/.freeflex-sweep-journal").c_str());
     if (options.log && !options.quiet)
       *options.log << "results: " << options.out_dir << " (" << n << " files, summary.json)\n";
   } catch (const IoError& e) {
@@ -137,6 +152,8 @@ nlohmann::ordered_json summary_json(const Design& design, const RunResult& run) 
     Json s = detail::to_json(design, *run.suppression);
     if (!s.is_null()) studies["suppression"] = s;
   }
+  if (run.lqg) studies["lqg"] = detail::to_json(design, *run.lqg);
+  if (run.sweep) studies["sweep"] = detail::to_json(design, *run.sweep);
   summary["studies"] = studies;
   Json files = Json::array();
   for (const auto& f : run.files) files.push_back(f);

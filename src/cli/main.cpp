@@ -30,6 +30,7 @@ struct Args {
   int noa = 0;  ///< 0: the design's model.noa
   bool quiet = false;
   PlotOptions plot;
+  int threads = 0;  ///< [sweep] threads, 0: every core
 };
 
 /// --noa as a number of admissible functions; throws UsageError.
@@ -126,6 +127,7 @@ int cmd_run(const Args& a, const Design& d) {
   opt.quiet = a.quiet;
   opt.log = &std::cout;
   opt.errors = &std::cerr;
+  opt.sweep.threads = a.threads;
   const RunResult r = run_design(d, opt);
   if (!r.ok()) std::cerr << "freeflex: failed: " << r.message << '\n';
   return r.exit_code();
@@ -147,6 +149,8 @@ int main(int argc, char** argv) {
   run->add_option("DESIGN", args.design, "design file (TOML)")->required();
   run->add_option("--out", args.out, "output directory (created if needed)")->required();
   run->add_flag("--quiet", args.quiet, "no progress or warnings; a failure's reason is still printed");
+  run->add_option("--threads", args.threads, "threads of a [sweep] (default 0: every core); results do not depend on it")
+      ->check(CLI::Range(0, 4096));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {

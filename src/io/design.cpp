@@ -61,6 +61,8 @@ Design parse_design(const std::string& text, const std::string& source) {
   Section root(&tbl, "", problems, 0);
   Design d;
   d.source = source;
+  d.digest = 1469598103934665603ULL;  // FNV-1a 64
+  for (unsigned char ch : text) d.digest = (d.digest ^ ch) * 1099511628211ULL;
   d.title = root.string("title", false).value_or(d.title);
   if (d.title.size() > lim::kMaxTitleBytes)  // it reaches every figure script and summary.json
     root.problem("title", "title is " + std::to_string(d.title.size()) + " bytes long; at most " +
@@ -79,6 +81,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   io_detail::read_maneuver(root, d, outputs, rejected_actuators);
   io_detail::read_controller(root, d, outputs, rejected_actuators);
   io_detail::read_bang_bang(root, d, outputs, problems, rejected_actuators);
+  io_detail::read_sensors_lqg_sweep(root, d, outputs);
   root.finish();
   outputs.check(problems);
   if (problems.empty()) {

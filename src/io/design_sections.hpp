@@ -121,6 +121,8 @@ void read_damping(Section& root, Design& d);
 void read_simulation(Section& root, Design& d, Outputs& outputs);
 void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
 void read_controller(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
+/// [[sensor]], [lqg] and [sweep] (io/design_sweep.cpp), after [controller].
+void read_sensors_lqg_sweep(Section& root, Design& d, Outputs& outputs);
 void read_bang_bang(Section& root, Design& d, Outputs& outputs, const Problems& problems,
                     const std::vector<std::string>& rejected);
 

@@ -11,6 +11,7 @@
 
 #include "freeflex/app/progress.hpp"
 #include "freeflex/app/studies.hpp"
+#include "freeflex/app/sweep.hpp"
 #include "freeflex/io/design.hpp"
 #include "freeflex/io/plot.hpp"
 
@@ -31,6 +32,9 @@ struct RunOptions {
   std::ostream* log = nullptr;     ///< progress, tables and the closing line; null: silent
   std::ostream* errors = nullptr;  ///< warnings as they happen; null: silent
   PlotOptions plot;                ///< the gnuplot run for figures, and its time limit per figure
+  /// [sweep]: threads, MPI share; an empty journal means out_dir/.freeflex-sweep-journal
+  /// (kept until the run's files are committed, so that a killed sweep resumes).
+  SweepExecution sweep;
 };
 
 /// Throws std::invalid_argument for an out_dir no file system accepts or bad plot
@@ -49,6 +53,8 @@ struct RunResult {
   std::optional<ManeuverStudyResult> maneuver;
   std::optional<SimulationStudyResult> simulation;
   std::optional<SuppressionStudyResult> suppression;
+  std::optional<LqgStudyResult> lqg;
+  std::optional<SweepStudyResult> sweep;
   std::vector<std::string> files;
   std::vector<std::string> warnings;
 };

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "freeflex/control/lqg.hpp"
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/dynamics/flexible_body.hpp"
 #include "freeflex/model/beam.hpp"
@@ -153,8 +154,46 @@ struct BangBangStudy {
   std::vector<int> modes = {1, 2};  ///< distinct k values, each in [0, 4] and at most the modes the actuator excites
 };
 
+/// [lqg]: the [controller]'s TV-LQR flown as a sampled-data (digital) controller on the
+/// full model, with the exact state and with the Kalman filter of the [[sensor]]s (LQG).
+struct LqgStudy {
+  double sample_rate_hz = 1000.0;        ///< sensors and controller
+  Eigen::VectorXd process_noise_density; ///< per controller actuator [N/√Hz or N m/√Hz]
+  double initial_std = 1e-3;             ///< the filter's P0 = initial_std² I
+  PlantOptions plant;                    ///< actuator gain, lag, delay, noise seed
+  bool delay_known = false;              ///< the controller predicts over the delay
+  std::string table = "lqg";             ///< TABLE.csv: one row per case
+  std::string figure = "lqg";
+};
+
+/// One uncertain parameter of a [sweep] ([sweep.NAME]).
+struct SweepParameter {
+  enum class Name { BendingStiffnessScale, MassScale, DampingRatio, ActuatorGain, DelayS, LagS };
+  enum class Kind { Uniform, Normal, Grid };
+  Name name = Name::BendingStiffnessScale;
+  Kind kind = Kind::Uniform;
+  double a = 0.0, b = 0.0;  ///< uniform and grid: [min, max]; normal: mean, std
+  int points = 1;           ///< grid
+};
+
+/// [sweep]: the [controller]'s TV-LQR (or LQG with [lqg]) designed once on the nominal
+/// model and flown on every sample of the uncertain parameters with the full model.
+struct SweepStudy {
+  int samples = 100;          ///< per grid point
+  std::uint64_t seed = 1;     ///< parameters and noise of sample i come from (seed, i)
+  SampledLoopOptions::Feedback feedback = SampledLoopOptions::Feedback::FullState;
+  double sample_rate_hz = 1000.0;
+  double requirement_energy_J = 0.0;  ///< a sample meets it when its residual vibration energy is <= this
+  std::vector<SweepParameter> parameters;
+  std::string table = "sweep";             ///< TABLE.csv: one row per sample
+  std::string figure = "sweep_histogram";  ///< histogram of log10 residual energy
+  /// Total samples: samples times the product of the grid sizes.
+  long total_samples() const;
+};
+
 struct Design {
   std::string source;  ///< file name, for messages
+  std::uint64_t digest = 0;  ///< FNV-1a of the file's text (a resumed sweep checks it)
   std::string title;
   BeamProperties beam;
   int noa = 6;         ///< [model] number of shape functions (elastic coordinates)
@@ -168,6 +207,9 @@ struct Design {
   std::optional<ManeuverStudy> maneuver;
   std::optional<ControllerStudy> controller;
   std::optional<BangBangStudy> bang_bang;
+  std::vector<Sensor> sensors;  ///< [[sensor]]
+  std::optional<LqgStudy> lqg;
+  std::optional<SweepStudy> sweep;
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;
@@ -186,5 +228,26 @@ long integrator_step_budget(int noa);
 Design load_design(const std::string& path);
 /// Same, from text; `source` names it in messages.
 Design parse_design(const std::string& text, const std::string& source);
+
+template <>
+struct EnumNames<SweepParameter::Name> {
+  static constexpr const char* what = "sweep parameter";
+  static constexpr std::array<std::pair<SweepParameter::Name, const char*>, 6> names{
+      {{SweepParameter::Name::BendingStiffnessScale, "bending_stiffness_scale"},
+       {SweepParameter::Name::MassScale, "mass_scale"},
+       {SweepParameter::Name::DampingRatio, "damping_ratio"},
+       {SweepParameter::Name::ActuatorGain, "actuator_gain"},
+       {SweepParameter::Name::DelayS, "delay_s"},
+       {SweepParameter::Name::LagS, "lag_s"}}};
+};
+
+template <>
+struct EnumNames<SweepParameter::Kind> {
+  static constexpr const char* what = "distribution";
+  static constexpr std::array<std::pair<SweepParameter::Kind, const char*>, 3> names{
+      {{SweepParameter::Kind::Uniform, "uniform"},
+       {SweepParameter::Kind::Normal, "normal"},
+       {SweepParameter::Kind::Grid, "grid"}}};
+};
 
 }  // namespace freeflex
