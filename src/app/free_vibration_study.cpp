@@ -51,7 +51,9 @@ ModeTable mode_table(const Design& design, int noa, bool estimate_error) {
   };
   t.error_estimate = Eigen::VectorXd::Constant(noa, kNaN);
   std::ostringstream method;
-  if (design.basis.kind == BasisOptions::Kind::FiniteElement) {
+  const bool fe_basis = design.basis.kind == BasisOptions::Kind::FiniteElement;
+  const bool clamped = fe_basis && design.basis.finite_element.modes == FiniteElementOptions::Modes::ClampedAtReference;
+  if (fe_basis && !clamped) {
     // eq. 4.4: omega_N - omega_exact ~ (omega_N - omega_2N) 2^r / (2^r - 1), r = 4 or 8
     const auto& fe = static_cast<const FiniteElementBasis&>(*basis);
     const int rate = fe.options().order == 5 ? 8 : 4;
@@ -72,12 +74,15 @@ ModeTable mode_table(const Design& design, int noa, bool estimate_error) {
            << (fe.options().order == 5 ? " quintic" : " cubic") << " elements at order h^" << rate;
   } else {
     // eq. 4.3: nested Ritz spaces, so omega(noa) - omega(2 noa) is a lower bound of the error
-    const int hi = std::min(2 * noa, kMaxNoa), lo = hi == noa ? noa / 2 : noa;
+    // (the modes clamped at o nest too: the first noa of a mesh are among its first 2 noa)
+    const int most = clamped ? std::min(kMaxNoa, static_cast<const FiniteElementBasis&>(*basis).dofs() - 2) : kMaxNoa;
+    const int hi = std::min(2 * noa, most), lo = hi == noa ? noa / 2 : noa;
     const Eigen::VectorXd w_lo = lo == noa ? fv.omega : omega_with(lo, design.basis);
     const Eigen::VectorXd w_hi = hi == noa ? fv.omega : omega_with(hi, design.basis);
     const int common = static_cast<int>(std::min(w_lo.size(), t.error_estimate.size()));
     t.error_estimate.head(common) = (w_lo.head(common) - w_hi.head(common)).cwiseQuotient(fv.omega.head(common));
-    method << "change from NOA " << lo << " to NOA " << hi;
+    method << "change from " << (clamped ? "n " : "NOA ") << lo << " to " << (clamped ? "n " : "NOA ") << hi
+           << (clamped ? " modes clamped at o" : "");
   }
   t.error_method = method.str();
   return t;

@@ -141,6 +141,9 @@ nlohmann::ordered_json summary_json(const Design& design, const RunResult& run) 
     summary["basis"] = to_string(design.basis.kind);
     summary["elements"] = design.basis.finite_element.elements;
     summary["element_order"] = design.basis.finite_element.order;
+    // free-free modes (the default): as before
+    if (design.basis.finite_element.modes != FiniteElementOptions::Modes::FreeFree)
+      summary["fe_modes"] = to_string(design.basis.finite_element.modes);
   }
   summary["status"] = to_string(run.status);
   summary["message"] = run.message;

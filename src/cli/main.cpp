@@ -70,6 +70,8 @@ int cmd_modes(const Args& a, const Design& d) {
       j["basis"] = to_string(d.basis.kind);
       j["elements"] = d.basis.finite_element.elements;
       j["element_order"] = d.basis.finite_element.order;
+      if (d.basis.finite_element.modes != FiniteElementOptions::Modes::FreeFree)  // the default: as before
+        j["fe_modes"] = to_string(d.basis.finite_element.modes);
     }
     j["omega_rad_s"] = array(t.omega_rad_s);
     j["freq_hz"] = array(t.freq_hz);
@@ -87,7 +89,10 @@ int cmd_modes(const Args& a, const Design& d) {
     std::cout << "elastic modes of '" << d.source << "', ";
     if (fe)
       std::cout << noa << " modes of " << d.basis.finite_element.elements
-                << (d.basis.finite_element.order == 5 ? " quintic" : " cubic") << " elements\n";
+                << (d.basis.finite_element.order == 5 ? " quintic" : " cubic") << " elements"
+                << (d.basis.finite_element.modes == FiniteElementOptions::Modes::ClampedAtReference ? ", clamped at o"
+                                                                                                     : "")
+                << "\n";
     else
       std::cout << "NOA = " << noa << "\n";
     std::cout << std::setw(5) << "mode" << std::setw(18) << "omega [rad/s]" << std::setw(16) << "freq [Hz]"

@@ -1,5 +1,6 @@
 // [model]: the number of shape functions and the basis they come from (the paper's
-// admissible functions, or finite-element modes with their element count and order).
+// admissible functions, or finite-element modes with their element count and order, and
+// which modes: free-free or clamped at o).
 #include <algorithm>
 
 #include "freeflex/model/basis.hpp"
@@ -27,7 +28,8 @@ void read_model(Section& root, Design& d) {
     if (*p == 4) model.problem("element_order", model.key_path("element_order") + " = 4, must be 3 or 5");
     else o.order = static_cast<int>(*p);
   }
-  for (const char* key : {"elements", "element_order"})
+  if (auto m = model.enumerated<FiniteElementOptions::Modes>("fe_modes", false)) o.modes = *m;
+  for (const char* key : {"elements", "element_order", "fe_modes"})
     if (!fe && model.has(key) && !model.has_problem(key))
       model.problem(key, model.key_path(key) + " applies to basis = \"finite_element\" only (the basis is \"" +
                              to_string(d.basis.kind) + "\")");

@@ -1,5 +1,6 @@
-// The finite-element basis: mesh, element matrices, the free-free eigenproblem by
-// shift-inverted subspace iteration, and the kept modes with their rigid part removed.
+// The finite-element basis: mesh, element matrices, the free-free (or clamped-at-o)
+// eigenproblem by shift-inverted subspace iteration, and the kept modes (free-free ones
+// with their rigid part removed).
 #include "freeflex/model/finite_element_basis.hpp"
 
 #include <algorithm>
@@ -141,6 +142,22 @@ Assembly assemble(const Beam& beam, const std::vector<double>& nodes, int order,
   return r;
 }
 
+/// Global DOFs on each side of node io, which is held (w = w' = 0): nodes below io with the
+/// bubbles of the elements left of it, and nodes above io with the bubbles right of it.
+std::pair<std::vector<int>, std::vector<int>> side_dofs(int io, int elements, bool bubbles) {
+  std::vector<int> left, right;
+  for (int i = 0; i <= elements; ++i) {
+    if (i == io) continue;
+    auto& side = i < io ? left : right;
+    side.push_back(2 * i);
+    side.push_back(2 * i + 1);
+  }
+  if (bubbles)
+    for (int e = 0; e < elements; ++e)
+      for (int j = 4; j < 6; ++j) (e < io ? left : right).push_back(global_dof(e, j, elements));
+  return {left, right};
+}
+
 /// A deterministic start vector entry in [-1, 1] (no <random>: its distributions differ
 /// between standard libraries).
 double start_entry(int i, int j) {
@@ -154,12 +171,44 @@ struct Eigenpairs {
   int iterations = 0;
 };
 
+/// The element model restricted to some of its DOFs (the others held at zero): columns of
+/// G and rows and columns of M; rows of G (curvature samples) with nothing left are dropped.
+Assembly restrict_to(const Assembly& fe, const std::vector<int>& keep) {
+  std::vector<Eigen::Triplet<double>> pt;
+  for (std::size_t j = 0; j < keep.size(); ++j) pt.emplace_back(keep[j], static_cast<int>(j), 1.0);
+  SpMat P(fe.M.rows(), static_cast<Eigen::Index>(keep.size()));
+  P.setFromTriplets(pt.begin(), pt.end());
+  const SpMat G = fe.G * P;
+  std::vector<char> used(static_cast<std::size_t>(G.rows()), 0);
+  for (int c = 0; c < G.outerSize(); ++c)
+    for (SpMat::InnerIterator it(G, c); it; ++it) used[static_cast<std::size_t>(it.row())] = 1;
+  std::vector<Eigen::Triplet<double>> rt;
+  Assembly r;
+  r.D.resize(G.rows());
+  int rows = 0;
+  for (int i = 0; i < G.rows(); ++i)
+    if (used[static_cast<std::size_t>(i)]) {
+      rt.emplace_back(rows, i, 1.0);
+      r.D(rows++) = fe.D(i);
+    }
+  r.D.conservativeResize(rows);
+  SpMat R(rows, G.rows());
+  R.setFromTriplets(rt.begin(), rt.end());
+  r.G = R * G;
+  r.M = SpMat(P.transpose() * fe.M * P);
+  r.K = SpMat(r.G.transpose() * r.D.asDiagonal() * r.G);
+  r.mass = fe.mass;
+  return r;
+}
+
 /// The q lowest eigenpairs of K v = lambda M v by subspace iteration on the shifted
 /// pencil (K + sigma M)^-1 M with a Rayleigh-Ritz step on the iterate Y every time. The
 /// projected stiffness is (GY)ᵀ D (GY), so the Ritz values are true Rayleigh quotients:
 /// errors of the solve move them only to second order, and they fall monotonically as the
 /// span converges.
-Eigenpairs lowest_eigenpairs(const Assembly& fe, int q, double sigma) {
+/// `rigid`: how many of the q are rigid modes (zero eigenvalues, left out of the convergence
+/// test): 2 free-free, 0 clamped.
+Eigenpairs lowest_eigenpairs(const Assembly& fe, int q, double sigma, int rigid) {
   const SpMat& M = fe.M;
   const int n = static_cast<int>(M.rows());
   const int p = std::min(n, std::max(2 * q, q + 8));
@@ -207,7 +256,7 @@ Eigenpairs lowest_eigenpairs(const Assembly& fe, int q, double sigma) {
     // previous iteration (measured: the change falls 1e3-fold per iteration on beams, down
     // to a few 1e-15 of noise), or stalled at round-off (<= 1e-11, not halving for 3 steps).
     const double change =
-        ((lambda - previous).tail(q - 2).cwiseAbs().array() / lambda.tail(q - 2).array()).maxCoeff();
+        ((lambda - previous).tail(q - rigid).cwiseAbs().array() / lambda.tail(q - rigid).array()).maxCoeff();
     stalled = change > 0.5 * last_change ? stalled + 1 : 0;
     last_change = change;
     previous = lambda;
@@ -251,24 +300,57 @@ FiniteElementBasis::FiniteElementBasis(const Beam& beam, int n, FiniteElementOpt
   // mean stiffness (500 EI / (m L^3)); any positive shift below the wanted eigenvalues works.
   const double L = beam.length();
   const double sigma = 100.0 * beam.mean_bending_stiffness() / (fe.mass * L * L * L);
-  const Eigenpairs ep = lowest_eigenpairs(fe, n + 2, sigma);
-  iterations_ = ep.iterations;
-  const double lambda_first = ep.lambda(2);
-  if (!(std::abs(ep.lambda(0)) <= 1e-8 * lambda_first && std::abs(ep.lambda(1)) <= 1e-8 * lambda_first))
-    throw std::runtime_error("finite-element basis: the element model's two lowest modes are not rigid");
-  omega_ = ep.lambda.tail(n).cwiseMax(0.0).cwiseSqrt();
-
-  // eq. 2.6: remove each mode's rigid part at o (w_o, w'_o at node io), scale by sqrt(m).
   const int io = nearest_node(nodes_, 0.0);
   const double scale = std::sqrt(fe.mass);
-  Eigen::MatrixXd V = ep.vectors.rightCols(n) * scale;
-  for (int k = 0; k < n; ++k) {
-    const double w_o = V(2 * io, k), t_o = V(2 * io + 1, k);
-    for (int i = 0; i <= N; ++i) {
-      V(2 * i, k) -= w_o + nodes_[i] * t_o;
-      V(2 * i + 1, k) -= t_o;
+  Eigen::MatrixXd V;
+  if (options_.modes == FiniteElementOptions::Modes::FreeFree) {
+    const Eigenpairs ep = lowest_eigenpairs(fe, n + 2, sigma, 2);
+    iterations_ = ep.iterations;
+    const double lambda_first = ep.lambda(2);
+    if (!(std::abs(ep.lambda(0)) <= 1e-8 * lambda_first && std::abs(ep.lambda(1)) <= 1e-8 * lambda_first))
+      throw std::runtime_error("finite-element basis: the element model's two lowest modes are not rigid");
+    omega_ = ep.lambda.tail(n).cwiseMax(0.0).cwiseSqrt();
+
+    // eq. 2.6: remove each mode's rigid part at o (w_o, w'_o at node io), scale by sqrt(m).
+    V = ep.vectors.rightCols(n) * scale;
+    for (int k = 0; k < n; ++k) {
+      const double w_o = V(2 * io, k), t_o = V(2 * io + 1, k);
+      for (int i = 0; i <= N; ++i) {
+        V(2 * i, k) -= w_o + nodes_[i] * t_o;
+        V(2 * i + 1, k) -= t_o;
+      }
+      V(2 * io, k) = V(2 * io + 1, k) = 0.0;  // exactly, whatever nodes_[io] rounds to
     }
-    V(2 * io, k) = V(2 * io + 1, k) = 0.0;  // exactly, whatever nodes_[io] rounds to
+  } else {
+    // eq. 2.7: held at o, the two sides are independent cantilevers. Each side's lowest
+    // modes (as many as n, or all it has), merged by frequency; near-ties (relative 1e-9,
+    // e.g. the mirror-image halves of a symmetric beam) take the longer side first, the
+    // left on equal lengths, so that the degenerate pairs stay together and in order.
+    const auto [left, right] = side_dofs(io, N, per_element_ == 6);
+    const std::vector<int>* sides[2] = {&left, &right};
+    Eigenpairs ep[2];
+    for (int s = 0; s < 2; ++s) {
+      const int q = std::min(n, static_cast<int>(sides[s]->size()));
+      ep[s] = lowest_eigenpairs(restrict_to(fe, *sides[s]), q, sigma, 0);
+      iterations_ = std::max(iterations_, ep[s].iterations);
+    }
+    const bool left_first_on_tie = beam.x_left() + beam.x_right() <= 0.0;  // |x_left| >= x_right
+    omega_.resize(n);
+    V = Eigen::MatrixXd::Zero(dofs_, n);
+    int next[2] = {0, 0};
+    for (int k = 0; k < n; ++k) {
+      const bool has_l = next[0] < ep[0].lambda.size(), has_r = next[1] < ep[1].lambda.size();
+      int s = has_l ? 0 : 1;
+      if (has_l && has_r) {
+        const double l = ep[0].lambda(next[0]), r = ep[1].lambda(next[1]);
+        s = std::abs(l - r) <= 1e-9 * std::max(l, r) ? (left_first_on_tie ? 0 : 1) : (l < r ? 0 : 1);
+      }
+      const int j = next[s]++;
+      omega_(k) = std::sqrt(std::max(ep[s].lambda(j), 0.0));
+      for (std::size_t i = 0; i < sides[s]->size(); ++i) V((*sides[s])[i], k) = scale * ep[s].vectors(i, j);
+    }
+  }
+  for (int k = 0; k < n; ++k) {
     // sign: the end value of larger magnitude is positive
     const double left = V(0, k), right = V(2 * N, k);
     if ((std::abs(right) >= std::abs(left) ? right : left) < 0.0) V.col(k) *= -1.0;

@@ -41,7 +41,7 @@ TEST_CASE("bad values name key, line, value and allowed range", "[io]") {
   CHECK_THAT(problems_of("[beam]\nlength_m = nan\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n"),
              Contains("line 2: beam.length_m = nan, must be a finite number"));
   CHECK_THAT(problems_of(std::string(kGood) + "noa_typo = 3\n"),
-             Contains("line 8: unknown key 'model.noa_typo' (allowed here: basis, element_order, elements, noa)"));
+             Contains("line 8: unknown key 'model.noa_typo' (allowed here: basis, element_order, elements, fe_modes, noa)"));
   CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n[model]\nnoa = 0\n"),
              Contains("line 6: model.noa = 0, must be a whole number in [1, 100]"));
   CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n[model]\nnoa = 101\n"),

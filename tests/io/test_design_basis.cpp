@@ -40,6 +40,11 @@ TEST_CASE("[model] basis keys: defaults, values, and the paper's basis when not 
   CHECK(cubic.basis.finite_element.elements == 12);
   CHECK(cubic.basis.finite_element.order == 3);
   CHECK(cubic.noa == 24);  // 12 cubic elements: 2 * 13 - 2 = 24 elastic modes
+  CHECK(fe.basis.finite_element.modes == FiniteElementOptions::Modes::FreeFree);  // the default
+  const Design clamped =
+      parse_design(kUniform + "[model]\nbasis = \"finite_element\"\nfe_modes = \"clamped_at_reference\"\n", "t.toml");
+  CHECK(clamped.basis.finite_element.modes == FiniteElementOptions::Modes::ClampedAtReference);
+  CHECK(clamped.body().basis().name() == "finite_element");
 }
 
 TEST_CASE("[model] bad basis keys name key, line, value and what is allowed", "[io]") {
@@ -49,6 +54,12 @@ TEST_CASE("[model] bad basis keys name key, line, value and what is allowed", "[
              Contains("line 7: model.elements = 0, must be a whole number in [1, 2000]"));
   CHECK_THAT(problems_of(kUniform + "[model]\nbasis = \"finite_element\"\nelement_order = 4\n"),
              Contains("line 7: model.element_order = 4, must be 3 or 5"));
+  CHECK_THAT(problems_of(kUniform + "[model]\nbasis = \"finite_element\"\nfe_modes = \"clamped\"\n"),
+             Contains("line 7: model.fe_modes = \"clamped\""));
+  CHECK_THAT(problems_of(kUniform + "[model]\nbasis = \"finite_element\"\nfe_modes = \"clamped\"\n"),
+             Contains("clamped_at_reference"));
+  CHECK_THAT(problems_of(kUniform + "[model]\nfe_modes = \"free_free\"\n"),
+             Contains("line 6: model.fe_modes applies to basis = \"finite_element\" only"));
   CHECK_THAT(problems_of(kUniform + "[model]\nelements = 10\n"),
              Contains("line 6: model.elements applies to basis = \"finite_element\" only"));
   CHECK_THAT(problems_of(kUniform + "[model]\nbasis = \"finite_element\"\nelements = 2\nelement_order = 3\nnoa = 5\n"),

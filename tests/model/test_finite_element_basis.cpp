@@ -1,7 +1,8 @@
 // The finite-element basis (docs/theory.md section 2b) against the exact frequencies of
 // tests/reference/ (transfer matrices and power series in mpmath, scripts/reference/):
 // stepped, stepped with hub and tip mass, tapered, uniform; convergence orders h^4 and
-// h^8; the hybrid model reproducing the element model; the mesh; bad input.
+// h^8; the hybrid model reproducing the element model; the modes clamped at o (the
+// paper's functions on the uniform beam); the mesh; bad input.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -130,6 +131,58 @@ TEST_CASE("FE basis: tapered beam, bare and with tip mass, to 1e-6 with cubics a
     CHECK(e3.cwiseAbs().maxCoeff() <= 1e-6);   // measured 9.4e-8 (bare, mode 5); issue 15 asks 1e-6
     CHECK(std::min(e5.minCoeff(), e3.minCoeff()) >= -1e-13);  // upper bounds, up to round-off
   }
+}
+
+TEST_CASE("FE basis clamped at o: uniform beam, o at the centre: cantilever pairs, the paper's Ritz values",
+          "[model]") {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  FiniteElementOptions o{80, 5};
+  o.modes = FiniteElementOptions::Modes::ClampedAtReference;
+  const FiniteElementBasis basis(beam, 10, o);
+  for (int k = 0; k < 10; ++k) {
+    // each half a cantilever of length 0.5 (closed form: eq. 2.2), once on each side
+    const double beta = cantilever_root(k / 2 + 1) / 0.5;
+    INFO("mode " << k + 1 << ": " << std::setprecision(16) << basis.element_model_omega()(k));
+    // 40 quintic elements per half: error falling as h^8, measured 4.8e-12 (mode 10; 20
+    // elements per half: 1.2e-9)
+    CHECK(std::abs(basis.element_model_omega()(k) / (beta * beta) - 1.0) <= 1e-10);
+  }
+  // one-sided, the left first on a tie (equal halves)
+  CHECK(basis.evaluate(-0.3).phi(0) != 0.0);
+  CHECK(basis.evaluate(0.3).phi(0) == 0.0);
+  CHECK(basis.evaluate(0.3).phi(1) != 0.0);
+  CHECK(basis.evaluate(-0.3).phi(1) == 0.0);
+  // At even n the two spaces are the same (sums and differences of a pair are the paper's
+  // symmetric and antisymmetric functions): the hybrid frequencies are the paper basis's
+  // Rayleigh-Ritz values (Table 1's NOA rows), not the exact free-free roots.
+  for (const int n : {2, 4, 6, 8, 10}) {
+    const Eigen::VectorXd fe = free_vibration(modal_integrals(beam, FiniteElementBasis(beam, n, o))).omega;
+    const Eigen::VectorXd paper = free_vibration(modal_integrals(beam, AdmissibleBasis(n, 0.5, 0.5))).omega;
+    const double diff = (fe.cwiseQuotient(paper).array() - 1.0).abs().maxCoeff();
+    INFO("n = " << n << ": max relative difference " << diff);
+    CHECK(diff <= 1e-10);  // the clamped modes' discretization error (measured 1.9e-11 at n = 10)
+  }
+}
+
+TEST_CASE("FE basis clamped at o: stepped beam with o off-centre: Ritz values above exact, falling with n",
+          "[model]") {
+  const Beam beam(freeflex_test::stepped_beam(true));
+  const Eigen::VectorXd exact = reference_column("stepped_beam_frequencies.csv", "stepped_hub_tip");
+  FiniteElementOptions o{40, 5};
+  o.modes = FiniteElementOptions::Modes::ClampedAtReference;
+  Eigen::VectorXd previous = Eigen::VectorXd::Constant(5, 1.0);
+  for (const int n : {6, 12, 24, 48}) {
+    const Eigen::VectorXd omega = free_vibration(modal_integrals(beam, FiniteElementBasis(beam, n, o))).omega;
+    const Eigen::VectorXd err = omega.head(5).cwiseQuotient(exact).array() - 1.0;
+    INFO("n = " << n << ": relative errors " << std::setprecision(3) << err.transpose());
+    CHECK(err.minCoeff() >= -1e-13);  // a conforming Ritz space (round-off allowed)
+    // nested spaces: never rising (round-off of the eigensolvers allowed)
+    CHECK(((err - previous).array() <= 1e-12).all());
+    previous = err;
+  }
+  // the truncation error of n clamped modes, falling as ~n^-5 (the paper's basis: 1/NOA):
+  // measured 3.4e-8 (mode 5) at n = 48; 5.6e-5 at n = 12
+  CHECK(previous.maxCoeff() <= 1e-7);
 }
 
 TEST_CASE("FE basis: Phi and Phi' vanish at o, C1 at nodes, derivatives match central differences",
