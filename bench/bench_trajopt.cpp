@@ -6,6 +6,12 @@
 // default). Reports wall time per solve, Ipopt iterations and the time per interval
 // (flat when the cost grows linearly in N).
 // Goal: N = 100 Hermite–Simpson under 50 ms; cost no worse than linear in N.
+//
+// BM_elastic_slew: the same slew with the elastic modes inside the problem (issue 16):
+// the first-order elastic state of every admissible function (elastic_modes "all"), all
+// at rest at T, at NOA = 2 ... 12 and N = 50 ... 800, Hermite–Simpson separated (tr 1)
+// and compressed (tr 2). Goal: NOA 6, N = 100, Hermite–Simpson under 0.3 s, time linear
+// in N.
 //   cmake -S . -B build-bench -DFREEFLEX_BUILD_BENCHMARKS=ON -DBUILD_TESTING=OFF
 //   cmake --build build-bench --target bench_trajopt && build-bench/bench/bench_trajopt
 #include <benchmark/benchmark.h>
@@ -55,8 +61,41 @@ void BM_slew(benchmark::State& state) {
   state.SetLabel(to_string(o.transcription));
 }
 
+void BM_elastic_slew(benchmark::State& state) {
+  const int noa = static_cast<int>(state.range(1));
+  const FlexibleBody body(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), noa,
+                          {{"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
+                           {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
+  ManeuverProblem p = Slew().problem;
+  p.elastic = true;
+  p.modes_at_rest = ManeuverProblem::all_modes;
+  TrajoptOptions o;
+  o.intervals = static_cast<int>(state.range(0));
+  o.transcription = state.range(2) == 1 ? Transcription::HermiteSimpson : Transcription::HermiteSimpsonCompressed;
+  TrajoptResult r;
+  double total_s = 0.0;
+  for (auto _ : state) {
+    r = solve_maneuver(body, p, o);
+    total_s += r.solve_time_s;
+    benchmark::DoNotOptimize(r.x.data());
+  }
+  if (!r.ok()) state.SkipWithError(r.message.c_str());
+  const double per_solve_s = total_s / static_cast<double>(state.iterations());
+  state.counters["ipopt_iter"] = r.iterations;
+  state.counters["n_elastic"] = body.n();
+  state.counters["solve_ms"] = 1e3 * per_solve_s;
+  state.counters["us_per_interval"] = 1e6 * per_solve_s / o.intervals;
+  state.SetLabel(to_string(o.transcription));
+}
+
 }  // namespace
 
+BENCHMARK(BM_elastic_slew)
+    ->ArgsProduct({{50, 100, 200, 400, 800}, {6}, {1, 2}})
+    ->ArgsProduct({{100}, {2, 4, 8, 10, 12}, {1, 2}})
+    ->ArgNames({"N", "noa", "tr"})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_slew)
     ->ArgsProduct({{25, 50, 100, 200, 400, 800}, {0, 1, 2}})
     ->ArgNames({"N", "tr"})

@@ -28,7 +28,10 @@
 #include "freeflex/sim/prescribed.hpp"
 #include "freeflex/sim/simulate.hpp"
 
+#include "freeflex/trajopt/chattering.hpp"
 #include "freeflex/trajopt/collocation.hpp"
+#include "freeflex/trajopt/elastic_dynamics.hpp"
+#include "freeflex/trajopt/maneuver_dynamics.hpp"
 #include "freeflex/trajopt/problem.hpp"
 #include "freeflex/trajopt/replay.hpp"
 #include "freeflex/trajopt/rigid_dynamics.hpp"
@@ -36,6 +39,7 @@
 #include "freeflex/trajopt/trajectory.hpp"
 
 #include "freeflex/control/closed_loop.hpp"
+#include "freeflex/control/lqg.hpp"
 #include "freeflex/control/lqr.hpp"
 #include "freeflex/control/lyapunov.hpp"
 #include "freeflex/control/metrics.hpp"
@@ -50,3 +54,4 @@
 #include "freeflex/app/progress.hpp"
 #include "freeflex/app/run.hpp"
 #include "freeflex/app/studies.hpp"
+#include "freeflex/app/sweep.hpp"

@@ -69,7 +69,7 @@ double paper_lambda(double omega, double mass_kg, double length_m, double ei) {
   return std::sqrt(omega * std::sqrt(mass_kg * length_m * length_m * length_m / ei));
 }
 
-Eigen::VectorXd mode_displacement(const AdmissibleBasis& basis, const Eigen::VectorXd& z,
+Eigen::VectorXd mode_displacement(const ShapeBasis& basis, const Eigen::VectorXd& z,
                                   const Eigen::VectorXd& x) {
   const int n = basis.size();
   if (z.size() != 3 + n)

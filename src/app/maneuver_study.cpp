@@ -23,8 +23,7 @@ std::string ipopt_output_file(const TrajoptOptions& options) {
 
 ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const StudyLog& study_log) {
   const ManeuverStudy& st = *design.maneuver;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
-                          design.geometric_stiffening);
+  const FlexibleBody body = design.body();
   std::ostream* log = study_log.log;
   TrajoptOptions opt = st.options;
   opt.verbose = !st.quiet && !quiet && log != nullptr;
@@ -32,6 +31,10 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     *log << "maneuver: " << to_string(opt.transcription) << ", " << opt.intervals << " intervals, "
          << (st.problem.free_time ? "free" : "fixed") << " duration" << (opt.verbose ? " (Ipopt log follows)" : " ...")
          << std::endl;
+  // the checker prints nothing until it ends, quiet or not: say what it is doing (its work
+  // is bounded by the design, design_limits::kMaxDerivativeTestUnknowns)
+  if (log && opt.derivative_test != "none")
+    *log << "maneuver: Ipopt's " << opt.derivative_test << " derivative test on the first mesh ..." << std::endl;
   // Ipopt would rewrite its output_file at each solve, keeping the last mesh-refinement
   // round only: freeflex collects the log of every round and writes it itself.
   for (auto it = opt.ipopt_options.begin(); it != opt.ipopt_options.end();) {
@@ -64,6 +67,28 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
   }
   r.status = StudyStatus::Ok;
   r.flown = flown_maneuver(t, st.problem);
+  r.chattering = detect_chattering(t, st.problem);
+  if (r.chattering.flagged) {
+    r.warnings.push_back("maneuver: " + r.chattering.message + "; " + r.chattering.remedy);
+    if (study_log.warn) study_log.warn(r.warnings.back());
+  }
+  if (st.problem.elastic) {
+    // The rigid optimum of the same objective: what the vibration-aware maneuver costs.
+    if (log) *log << "maneuver: rigid counterpart (no elastic part) for comparison ... " << std::flush;
+    const ManeuverProblem rigid = rigid_counterpart(st.problem);
+    TrajoptOptions ro = opt;
+    ro.verbose = false;
+    r.rigid_optimum = solve_maneuver(body, rigid, ro);
+    if (log) *log << to_string(r.rigid_optimum->status) << ", control energy " << r.rigid_optimum->control_energy
+                  << " against " << t.control_energy << '\n';
+    if (r.rigid_optimum->ok())
+      r.rigid_flown = flown_maneuver(*r.rigid_optimum, rigid);
+    else {
+      r.warnings.push_back("maneuver: the rigid counterpart did not solve (" +
+                           std::string(to_string(r.rigid_optimum->status)) + "): " + r.rigid_optimum->message);
+      if (study_log.warn) study_log.warn(r.warnings.back());
+    }
+  }
   return r;
 }
 
@@ -114,6 +139,36 @@ Json to_json(const ManeuverStudyResult& r) {
   j["max_defect"] = t.max_defect;
   j["transcription"] = to_string(t.transcription);
   j["intervals"] = t.intervals;
+  if (r.ok()) {
+    Json c = Json::object();
+    c["flagged"] = r.chattering.flagged;
+    c["message"] = r.chattering.message;
+    if (r.chattering.flagged) {
+      c["remedy"] = r.chattering.remedy;
+      c["suggested_smooth_weight"] = r.chattering.suggested_smooth_weight;
+      c["suggested_rate_limits"] = std::vector<double>(r.chattering.suggested_rate_limit.data(),
+                                                       r.chattering.suggested_rate_limit.data() +
+                                                           r.chattering.suggested_rate_limit.size());
+    }
+    j["chattering"] = c;
+  }
+  if (t.x_elastic.cols() > 0) {
+    Json e = Json::object();
+    e["terminal_vibration_energy_J"] = t.terminal_vibration_energy_J;  // the optimizer's first-order model
+    e["peak_tip_deflection_m"] = t.peak_tip_deflection_m;              // at the collocation points
+    e["control_energy_N2s"] = t.control_energy;  // ∫ uᵀ W u dt of the commands as flown
+    if (r.rigid_optimum) {
+      const TrajoptResult& ro = *r.rigid_optimum;
+      Json jr = Json::object();
+      jr["status"] = status_text(ro);
+      jr["objective"] = ro.objective;
+      jr["duration_s"] = ro.duration_s;
+      jr["control_energy_N2s"] = ro.control_energy;
+      e["rigid_optimum"] = jr;
+      if (ro.ok()) e["extra_control_energy_N2s"] = t.control_energy - ro.control_energy;
+    }
+    j["elastic"] = e;
+  }
   return j;
 }
 

@@ -2,9 +2,11 @@
 // controller fly it), their files through a staged output directory, summary.json last.
 #include "freeflex/app/run.hpp"
 
+#include <cstdio>
 #include <stdexcept>
 
 #include "app/study_files.hpp"
+#include "app/sweep_files.hpp"
 #include "freeflex/io/output.hpp"
 #include "freeflex/version.hpp"
 #include "io/staging.hpp"
@@ -54,6 +56,18 @@ void run_studies(const Design& design, const RunOptions& options, RunResult& run
     note(run, *run.suppression);
     any = true;
   }
+  if (design.lqg && run.suppression) {
+    run.lqg = run_lqg_study(design, *run.suppression, maneuver, study_log);
+    detail::write_lqg(design, *run.lqg, out);
+    note(run, *run.lqg);
+  }
+  if (design.sweep && run.suppression) {
+    SweepExecution ex = options.sweep;
+    if (ex.journal.empty() && !options.out_dir.empty()) ex.journal = options.out_dir + "/.freeflex-sweep-journal";
+    run.sweep = run_sweep_study(design, *run.suppression, maneuver, ex, study_log);
+    detail::write_sweep(design, *run.sweep, out);
+    note(run, *run.sweep);
+  }
   if (!any) out.warn("the design asks for no study; add [free_vibration] or [simulation] (see README, design keys)");
 }
 
@@ -71,6 +85,7 @@ void write_summary(const Design& design, RunResult& run, detail::RunOutput& out)
 void validate(const RunOptions& options) {
   if (options.out_dir.find('\0') != std::string::npos)
     throw std::invalid_argument("run options: out_dir contains a NUL character");
+  validate(options.plot);
 }
 
 RunResult run_design(const Design& design, const RunOptions& options) {
@@ -78,12 +93,14 @@ RunResult run_design(const Design& design, const RunOptions& options) {
   std::ostream* warnings = options.quiet ? nullptr : options.errors;
   std::optional<staging::StagedDirectory> dir;  // none: the results only, nothing is written
   if (!options.out_dir.empty()) dir.emplace(options.out_dir);
-  detail::RunOutput out(dir ? dir->staging() : "", warnings, options.out_dir);
+  detail::RunOutput out(dir ? dir->staging() : "", warnings, options.out_dir, options.plot);
   RunResult run;
+  // Messages name DIR, not the staging directory, which is gone by the time they are read.
+  const std::string kept = "; '" + options.out_dir + "' keeps the previous run's files";
   try {
     run_studies(design, options, run, out);
-  } catch (const IoError&) {
-    throw;  // before the commit the previous results stay as they were
+  } catch (const IoError& e) {
+    throw IoError(out.shown(e.what()) + kept);  // before the commit DIR is untouched
   } catch (const std::invalid_argument&) {
     throw;  // bad input found late: nothing is written (exit 2)
   } catch (const std::exception& e) {
@@ -97,14 +114,19 @@ RunResult run_design(const Design& design, const RunOptions& options) {
     run.warnings = out.warnings();
     return run;
   }
+  const std::string failed_before = run.ok() ? "" : "; the run had failed before: " + run.message;
   try {
     write_summary(design, run, out);
+  } catch (const IoError& e) {
+    throw IoError(out.shown(e.what()) + kept + failed_before);
+  }
+  try {
     const std::size_t n = dir->commit();
+    if (run.sweep && options.sweep.journal.empty()) std::remove((options.out_dir + "/.freeflex-sweep-journal").c_str());
     if (options.log && !options.quiet)
       *options.log << "results: " << options.out_dir << " (" << n << " files, summary.json)\n";
   } catch (const IoError& e) {
-    if (run.ok()) throw;
-    throw IoError(std::string(e.what()) + "; the run had failed before: " + run.message);
+    throw IoError(out.shown(e.what()) + failed_before);
   }
   return run;
 }
@@ -116,6 +138,14 @@ nlohmann::ordered_json summary_json(const Design& design, const RunResult& run) 
   summary["design"] = design.source;
   summary["title"] = design.title;
   summary["noa"] = design.noa;
+  if (design.basis.kind == BasisOptions::Kind::FiniteElement) {  // the paper's basis: as before
+    summary["basis"] = to_string(design.basis.kind);
+    summary["elements"] = design.basis.finite_element.elements;
+    summary["element_order"] = design.basis.finite_element.order;
+    // free-free modes (the default): as before
+    if (design.basis.finite_element.modes != FiniteElementOptions::Modes::FreeFree)
+      summary["fe_modes"] = to_string(design.basis.finite_element.modes);
+  }
   summary["status"] = to_string(run.status);
   summary["message"] = run.message;
   Json studies = Json::object();
@@ -126,6 +156,8 @@ nlohmann::ordered_json summary_json(const Design& design, const RunResult& run) 
     Json s = detail::to_json(design, *run.suppression);
     if (!s.is_null()) studies["suppression"] = s;
   }
+  if (run.lqg) studies["lqg"] = detail::to_json(design, *run.lqg);
+  if (run.sweep) studies["sweep"] = detail::to_json(design, *run.sweep);
   summary["studies"] = studies;
   Json files = Json::array();
   for (const auto& f : run.files) files.push_back(f);

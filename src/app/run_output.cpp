@@ -34,10 +34,25 @@ void RunOutput::csv(const std::string& name, const std::vector<std::string>& hea
 
 void RunOutput::plot(const PlotSpec& spec, bool enabled) {
   if (!enabled || dir_.empty()) return;
-  const std::string why = shown(render_plot(spec, dir_));
+  PlotOptions options = plot_;
+  if (gnuplot_stalled_) options.gnuplot.clear();  // the script only: a stalled gnuplot would stall again
+  PlotResult r;
+  try {
+    r = render_plot(spec, dir_, options);
+  } catch (const IoError& e) {
+    throw IoError(shown(e.what()));
+  }
   files_.push_back(spec.name + ".gp");
-  if (why.empty()) files_.push_back(spec.name + ".png");
-  else warn("figure " + spec.name + ".png not drawn: " + why);
+  if (r.ok()) {
+    files_.push_back(spec.name + ".png");
+    return;
+  }
+  if (r.status == PlotResult::Status::TimedOut) gnuplot_stalled_ = true;
+  const std::string why = gnuplot_stalled_ && r.status == PlotResult::Status::NoGnuplot
+                              ? "gnuplot timed out on an earlier figure, so it was not run again; run 'gnuplot " +
+                                    spec.name + ".gp' in " + dir_
+                              : r.message;
+  warn("figure " + spec.name + ".png not drawn: " + shown(why));
 }
 
 void RunOutput::warn(const std::string& message) {

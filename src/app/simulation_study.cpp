@@ -87,7 +87,7 @@ void warn(SimulationStudyResult& r, const StudyLog& study_log, const std::string
 }
 
 /// The lowest elastic frequency with the reference frame held: sqrt of the smallest
-/// eigenvalue of (K, M). Spin at Ω softens the paper's model by Ω² M (eq. 13.12), which
+/// eigenvalue of (K, M). Spin at Ω softens the paper's model by Ω² M (eq. 14.12), which
 /// cancels this mode's stiffness at Ω = ω1: the scale the spin rate is measured against.
 double held_first_frequency(const FlexibleBody& body) {
   const ModalIntegrals& mi = body.integrals();
@@ -177,13 +177,58 @@ void settle(SimulationStudyResult& r, const StudyLog& study_log, const FlexibleB
     fail(r, study_log, what + " left its range: " + run.message, StudyStatus::OutOfRange);
 }
 
+/// The second run of the error estimate, its line in the log and, when the estimate is a
+/// sizeable part of the motion, a warning that the result is not converged.
+template <class Simulate>
+GlobalErrorEstimate estimate_error(const char* what, const SimulationResult& run, const SimulationOptions& options,
+                                   Simulate simulate, SimulationStudyResult& r, const StudyLog& study_log) {
+  std::ostream* log = study_log.log;
+  const SimulationOptions tight = error_reference_options(options);
+  if (log) *log << "  error estimate: " << what;
+  GlobalErrorEstimate e;
+  if (tight.integrator.rtol < options.integrator.rtol) {
+    if (log) *log << " again at rtol " << tight.integrator.rtol << " ... " << std::flush;
+    e = compare_runs(run, simulate(tight), tight);
+  } else {
+    e.rtol = tight.integrator.rtol;
+    e.atol = tight.integrator.atol;
+    e.message = "rtol is at the floor of 1e-14: no tighter run to compare with";
+  }
+  if (!e.available) {
+    if (log) *log << " not available (" << e.message << ")\n";
+    const std::string w = std::string(what) + ": no global error estimate: " + e.message;
+    r.warnings.push_back(w);
+    if (study_log.warn) study_log.warn(w);
+    return e;
+  }
+  if (log)
+    *log << std::setprecision(2) << "theta " << e.theta_rad << " rad, R " << e.R_m << " m, q " << e.q << " (worst at "
+         << std::setprecision(4) << e.worst_time_s << " s; " << std::fixed << std::setprecision(3) << e.wall_time_s
+         << " s)" << std::defaultfloat << std::setprecision(6) << '\n';
+  // Not converged: an error of 1% of the largest excursion of R or q, or of 0.01 rad in θ;
+  // an error below 100 atol (the design's own scale of an insignificant error) never is,
+  // so that a coordinate that stays at zero up to round-off raises nothing.
+  const double R_peak = run.z.leftCols(2).cwiseAbs().maxCoeff();
+  const double q_peak = run.z.cols() > 3 ? run.z.rightCols(run.z.cols() - 3).cwiseAbs().maxCoeff() : 0.0;
+  const double floor = 100.0 * options.integrator.atol;
+  auto sizeable = [floor](double err, double peak) { return err > floor && err > 1e-2 * peak; };
+  if (e.theta_rad > 1e-2 || sizeable(e.R_m, R_peak) || sizeable(e.q, q_peak)) {
+    std::ostringstream w;
+    w << std::setprecision(2) << what << ": not converged: the estimated global error reaches theta " << e.theta_rad
+      << " rad, R " << e.R_m << " m (peak " << R_peak << "), q " << e.q << " (peak " << q_peak << ") near t = "
+      << std::setprecision(4) << e.worst_time_s << " s; lower rtol (see README, [simulation])";
+    r.warnings.push_back(w.str());
+    if (study_log.warn) study_log.warn(w.str());
+  }
+  return e;
+}
+
 }  // namespace
 
 SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver,
                                            const StudyLog& study_log) {
   const SimulationStudy& st = *design.simulation;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
-                          design.geometric_stiffening);
+  const FlexibleBody body = design.body();
   Excitation ex = design.excitation();
   std::optional<PrescribedMotion> motion;
   if (design.motion) motion = design.motion->trajectory();
@@ -232,11 +277,18 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     } else if (nl.ok()) {
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
     }
+    if (nl.ok() && st.error_estimate)
+      s.error_estimate = estimate_error(
+          "full nonlinear model", nl, st.options,
+          [&](const SimulationOptions& tight) {
+            return motion ? simulate_prescribed(body, ex, *motion, tight, false) : simulate_full(body, ex, tight);
+          },
+          r, study_log);
     r.nonlinear = std::move(s);
   }
   if (st.compare_stiffening) {
-    const FlexibleBody other(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
-                             !design.geometric_stiffening);
+    const FlexibleBody other(Beam(design.beam), design.noa, design.basis, design.force_elements(),
+                             design.damping_ratios, !design.geometric_stiffening);
     const FullModel other_full(other);
     const std::string what = std::string("full nonlinear model ") +
                              (other.geometric_stiffening() ? "with" : "without") + " geometric stiffening (comparison)";
@@ -283,6 +335,15 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     settle(r, study_log, body, s, nullptr, nullptr, "perturbation solution");
     if (pt.ok()) {
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
+      if (st.error_estimate)
+        s.error_estimate = estimate_error(
+            "perturbation solution", pt, st.options,
+            [&](const SimulationOptions& tight) {
+              if (motion) return simulate_prescribed(body, ex, *motion, tight, true);
+              return (nominal ? simulate_perturbation_about(body, ex, nominal, tight)
+                              : simulate_perturbation(body, ex, tight)).total;
+            },
+            r, study_log);
     } else if (pt.status == IntegrationStatus::Failed) {
       fail(r, study_log, "perturbation simulation failed: " + pt.message);
     }
@@ -389,6 +450,24 @@ Json run_stats(const SimulationStudyResult::Solution& s) {
       range["energy_balance_error_rel"] = *g.energy_balance_error_rel;
     }
     j["range"] = range;
+  }
+  if (const auto& e = s.error_estimate) {
+    Json g = Json::object();
+    g["method"] = "second run at rtol/10, atol/10; max difference over the output times";
+    g["available"] = e->available;
+    if (!e->available) g["message"] = e->message;
+    g["rtol"] = e->rtol;
+    g["atol"] = e->atol;
+    if (e->available) {
+      g["max_abs_R_m"] = e->R_m;
+      g["max_abs_theta_rad"] = e->theta_rad;
+      g["max_abs_q"] = e->q;
+      g["max_abs_rates"] = e->rates;
+      g["worst_time_s"] = e->worst_time_s;
+    }
+    g["rhs_evaluations"] = e->rhs_evaluations;
+    g["wall_time_s"] = e->wall_time_s;
+    j["global_error_estimate"] = g;
   }
   return j;
 }

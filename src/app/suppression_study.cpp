@@ -41,6 +41,7 @@ Eigen::MatrixXd element_commands(const Excitation& ex, int elements, const Eigen
 SimulationOptions comparison_options(const Design& design) {
   SimulationOptions sim = design.simulation ? design.simulation->options : SimulationOptions{};
   sim.duration_s = design.controller->simulate_until_s;
+  sim.integrator.max_total_steps = integrator_step_budget(design.noa);  // the design's work bound
   if (!design.simulation) {
     sim.output_step_s = 0.005;
     sim.integrator.rtol = 1e-10;
@@ -103,6 +104,7 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
   }
   for (int k : bb.modes) {
     SwitchTimeOptions so;
+    so.max_steps_per_simulation = integrator_step_budget(design.noa);
     if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ... " << std::flush;
     ProgressReport progress(log, 0.0);
     so.progress = [&progress](int sims) { progress.note(std::to_string(sims) + " first-order simulations"); };
@@ -138,8 +140,7 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
 SuppressionStudyResult run_suppression_study(const Design& design, const ManeuverStudyResult* maneuver,
                                              const StudyLog& study_log) {
   const ControllerStudy& st = *design.controller;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
-                          design.geometric_stiffening);
+  const FlexibleBody body = design.body();
   const int ne = static_cast<int>(body.elements().size());
   std::ostream* log = study_log.log;
   SuppressionStudyResult r;
@@ -178,25 +179,44 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     r.message = chain.message;
     return r;
   }
-  const Excitation nominal_ex = problem.maneuver ? problem.maneuver->driving(problem.loads) : problem.loads;
-  const PerturbationResult& pert = chain.open_loop_first_order;
-  const SimulationResult& full = chain.open_loop_full;
-  r.cases.push_back({"open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
-                     element_commands(nominal_ex, ne, pert.total.t, {}, nullptr), 0.0, {}});
-  r.cases.push_back({"open_loop", "nonlinear", full.t, full.z, full.z_dot,
-                     element_commands(nominal_ex, ne, full.t, {}, nullptr), 0.0, {}});
-  if (chain.status == Status::TvlqrFailed) {
-    fail(chain.message);
-    return r;
-  }
-  for (const ClosedLoopResult* c : {&chain.closed_loop_first_order, &chain.closed_loop_full}) {
-    if (!c->ok()) {
-      fail("closed-loop simulation failed: " + c->message);
-      continue;
+  // The cases of one chain: its open loop and its closed loops, names prefixed.
+  auto add_cases = [&](const SuppressionResult& ch, const SuppressionProblem& pr, const std::string& prefix) {
+    const Excitation nominal_ex = pr.maneuver ? pr.maneuver->driving(pr.loads) : pr.loads;
+    const PerturbationResult& pert = ch.open_loop_first_order;
+    const SimulationResult& full = ch.open_loop_full;
+    r.cases.push_back({prefix + "open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
+                       element_commands(nominal_ex, ne, pert.total.t, {}, nullptr), 0.0, {}});
+    r.cases.push_back({prefix + "open_loop", "nonlinear", full.t, full.z, full.z_dot,
+                       element_commands(nominal_ex, ne, full.t, {}, nullptr), 0.0, {}});
+    if (ch.status == Status::TvlqrFailed) {
+      fail(prefix + ch.message);
+      return false;
     }
-    r.cases.push_back({"tvlqr", c == &chain.closed_loop_first_order ? "first_order" : "nonlinear", c->t, c->z,
-                       c->z_dot, element_commands(problem.loads, ne, c->t, st.actuators, &c->commands),
-                       c->saturated_fraction, {}});
+    for (const ClosedLoopResult* c : {&ch.closed_loop_first_order, &ch.closed_loop_full}) {
+      if (!c->ok()) {
+        fail(prefix + "closed-loop simulation failed: " + c->message);
+        continue;
+      }
+      r.cases.push_back({prefix + "tvlqr", c == &ch.closed_loop_first_order ? "first_order" : "nonlinear", c->t, c->z,
+                         c->z_dot, element_commands(pr.loads, ne, c->t, st.actuators, &c->commands),
+                         c->saturated_fraction, {}});
+    }
+    return true;
+  };
+  // A vibration-aware maneuver is compared with its rigid optimum, both with TV-LQR.
+  const bool vibration_aware = maneuver && maneuver->rigid_optimum;
+  if (!add_cases(chain, problem, vibration_aware ? "vibration_aware_" : "")) return r;
+  if (vibration_aware && !maneuver->rigid_flown)
+    fail("the rigid counterpart of the maneuver did not solve: no rigid_optimum rows");
+  if (vibration_aware && maneuver->rigid_flown) {
+    SuppressionProblem rp = problem;
+    rp.maneuver = maneuver->rigid_flown;
+    if (log) *log << "suppression: the rigid optimum, for comparison\n";
+    r.rigid_chain = suppress_vibration(body, rp, with_progress(options, log, report));
+    if (r.rigid_chain->status == Status::HorizonTooShort || r.rigid_chain->status == Status::OpenLoopFailed)
+      fail("rigid optimum: " + r.rigid_chain->message);
+    else
+      add_cases(*r.rigid_chain, rp, "rigid_optimum_");
   }
   if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log);
 
@@ -223,8 +243,7 @@ namespace detail {
 void write_suppression(const Design& design, const SuppressionStudyResult& r, RunOutput& out) {
   const ControllerStudy& st = *design.controller;
   if (r.cases.empty() || r.chain.status == SuppressionResult::Status::TvlqrFailed) return;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
-                          design.geometric_stiffening);
+  const FlexibleBody body = design.body();
   std::ostringstream csv;
   csv << "case,model,residual_vibration_energy_J,peak_tip_deflection_m,tip_settling_time_s,final_position_error_m,"
          "final_attitude_error_rad,control_effort_N2s,peak_command,saturated_fraction,mean_vibration_energy_J\n";
@@ -275,6 +294,7 @@ Json to_json(const Design& design, const SuppressionStudyResult& r) {
   js["horizon_s"] = design.controller->horizon_s;
   js["tvlqr_status"] = chain.law.ok() ? "ok" : chain.law.message;
   js["tvlqr_solve_time_s"] = chain.law.wall_time_s;
+  if (r.rigid_chain) js["rigid_optimum_tvlqr_status"] = r.rigid_chain->law.ok() ? "ok" : r.rigid_chain->law.message;
   if (chain.law.terminal_care) {
     js["terminal_care_residual"] = chain.law.terminal_care->residual;
     js["terminal_care_residual_normwise"] = chain.law.terminal_care->residual_normwise;

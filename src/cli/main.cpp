@@ -14,9 +14,9 @@
 #include "freeflex/analysis/free_vibration.hpp"
 #include "freeflex/app/run.hpp"
 #include "freeflex/model/beam.hpp"
-#include "freeflex/model/modal_integrals.hpp"
 #include "freeflex/io/output.hpp"
 #include "freeflex/model/basis.hpp"
+#include "freeflex/model/modal_integrals.hpp"
 #include "freeflex/version.hpp"
 
 namespace {
@@ -34,6 +34,8 @@ struct Args {
   bool quiet = false;
   std::string spin_text;        ///< --spin: steady spin rate [rad/s], reference frame held
   std::string stiffening = "";  ///< --stiffening on|off (default: the design's model)
+  PlotOptions plot;
+  int threads = 0;  ///< [sweep] threads, 0: every core
 };
 
 /// --noa as a number of admissible functions; throws UsageError.
@@ -46,7 +48,7 @@ int parse_noa(const std::string& text) {
 }
 
 /// `freeflex modes --spin W`: frequencies with the reference frame held spinning at W
-/// (docs/theory.md eq. 13.12); NaN for a mode the spin has buckled (ω² < 0).
+/// (docs/theory.md eq. 14.12); NaN for a mode the spin has buckled (ω² < 0).
 int cmd_spinning_modes(const Args& a, const Design& d, int noa) {
   char* end = nullptr;
   const double spin = a.spin_text.empty() ? 0.0 : std::strtod(a.spin_text.c_str(), &end);
@@ -54,7 +56,7 @@ int cmd_spinning_modes(const Args& a, const Design& d, int noa) {
     throw UsageError{"--spin " + a.spin_text + ": must be a number of rad/s in [-1e6, 1e6]"};
   const bool stiff = a.stiffening.empty() ? d.geometric_stiffening : a.stiffening == "on";
   const Beam beam(d.beam);
-  const Eigen::VectorXd w2 = spinning_frequencies_squared(stiffened_modal_integrals(beam, make_basis(beam, noa)), spin, stiff);
+  const Eigen::VectorXd w2 = spinning_frequencies_squared(stiffened_modal_integrals(beam, *make_basis(beam, noa, d.basis)), spin, stiff);
   auto omega = [](double x) { return x >= 0.0 ? std::sqrt(x) : std::numeric_limits<double>::quiet_NaN(); };
   std::cout << std::setprecision(12);
   if (a.format == "csv") {
@@ -82,38 +84,95 @@ int cmd_spinning_modes(const Args& a, const Design& d, int noa) {
 int cmd_modes(const Args& a, const Design& d) {
   const int noa = a.noa > 0 ? a.noa : d.noa;
   if (!a.spin_text.empty() || !a.stiffening.empty()) return cmd_spinning_modes(a, d, noa);
-  const ModeTable t = mode_table(d, noa);
+  // an error estimate where no closed form gives the exact frequencies (docs/theory.md 4b)
+  const bool estimate = !has_exact_modes(d);
+  const ModeTable t = mode_table(d, noa, estimate);
+  const bool fe = d.basis.kind == BasisOptions::Kind::FiniteElement;
   std::cout << std::setprecision(12);
   if (a.format == "csv") {
-    std::cout << "mode,omega_rad_s,freq_hz,lambda\n";
-    for (int k = 0; k < t.lambda.size(); ++k)
-      std::cout << k + 1 << ',' << t.omega_rad_s(k) << ',' << t.freq_hz(k) << ',' << t.lambda(k) << '\n';
+    std::cout << "mode,omega_rad_s,freq_hz,lambda" << (estimate ? ",error_estimate" : "") << '\n';
+    for (int k = 0; k < t.lambda.size(); ++k) {
+      std::cout << k + 1 << ',' << t.omega_rad_s(k) << ',' << t.freq_hz(k) << ',' << t.lambda(k);
+      if (estimate) {
+        std::cout << ',';
+        // empty cell where there is no estimate
+        if (std::isfinite(t.error_estimate(k))) std::cout << std::setprecision(3) << t.error_estimate(k);
+        std::cout << std::setprecision(12);
+      }
+      std::cout << '\n';
+    }
   } else if (a.format == "json") {
     auto array = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
     nlohmann::ordered_json j;
     j["design"] = d.source;
     j["noa"] = noa;
+    if (fe) {
+      j["basis"] = to_string(d.basis.kind);
+      j["elements"] = d.basis.finite_element.elements;
+      j["element_order"] = d.basis.finite_element.order;
+      if (d.basis.finite_element.modes != FiniteElementOptions::Modes::FreeFree)  // the default: as before
+        j["fe_modes"] = to_string(d.basis.finite_element.modes);
+    }
     j["omega_rad_s"] = array(t.omega_rad_s);
     j["freq_hz"] = array(t.freq_hz);
     j["lambda"] = array(t.lambda);
+    if (estimate) {
+      // NaN (no estimate) is not JSON: null
+      nlohmann::ordered_json err = nlohmann::ordered_json::array();
+      for (int k = 0; k < t.error_estimate.size(); ++k)
+        err.push_back(std::isfinite(t.error_estimate(k)) ? nlohmann::ordered_json(t.error_estimate(k)) : nullptr);
+      j["error_estimate"] = err;
+      j["error_method"] = t.error_method;
+    }
     std::cout << j.dump(2) << '\n';
   } else {
-    std::cout << "elastic modes of '" << d.source << "', NOA = " << noa << "\n"
-              << std::setw(5) << "mode" << std::setw(18) << "omega [rad/s]" << std::setw(16) << "freq [Hz]"
-              << std::setw(14) << "lambda" << '\n';
-    for (int k = 0; k < t.lambda.size(); ++k)
+    std::cout << "elastic modes of '" << d.source << "', ";
+    if (fe)
+      std::cout << noa << " modes of " << d.basis.finite_element.elements
+                << (d.basis.finite_element.order == 5 ? " quintic" : " cubic") << " elements"
+                << (d.basis.finite_element.modes == FiniteElementOptions::Modes::ClampedAtReference ? ", clamped at o"
+                                                                                                     : "")
+                << "\n";
+    else
+      std::cout << "NOA = " << noa << "\n";
+    std::cout << std::setw(5) << "mode" << std::setw(18) << "omega [rad/s]" << std::setw(16) << "freq [Hz]"
+              << std::setw(14) << "lambda" << (estimate ? "   error est." : "") << '\n';
+    for (int k = 0; k < t.lambda.size(); ++k) {
       std::cout << std::setw(5) << k + 1 << std::fixed << std::setprecision(6) << std::setw(18) << t.omega_rad_s(k)
-                << std::setw(16) << t.freq_hz(k) << std::setw(14) << t.lambda(k) << std::defaultfloat << '\n';
+                << std::setw(16) << t.freq_hz(k) << std::setw(14) << t.lambda(k);
+      if (estimate) std::cout << std::scientific << std::setprecision(1) << std::setw(13) << t.error_estimate(k);
+      std::cout << std::defaultfloat << '\n';
+    }
+    if (estimate)
+      std::cout << "error est.: relative (omega - exact) / omega, " << t.error_method
+                << (fe ? "" : " (a Ritz estimate's error is at least this)") << '\n';
   }
   return kExitOk;
+}
+
+/// The figures' gnuplot and its time limit: FREEFLEX_GNUPLOT (a path; empty: no figures
+/// drawn) and FREEFLEX_GNUPLOT_TIMEOUT_S override the defaults. Throws UsageError.
+PlotOptions plot_options_from_environment() {
+  PlotOptions o;
+  if (const char* g = std::getenv("FREEFLEX_GNUPLOT")) o.gnuplot = g;
+  if (const char* t = std::getenv("FREEFLEX_GNUPLOT_TIMEOUT_S")) {
+    char* end = nullptr;
+    const double v = std::strtod(t, &end);
+    if (*t == '\0' || *end != '\0' || !(v > 0.0 && v <= 3600.0))
+      throw UsageError{"FREEFLEX_GNUPLOT_TIMEOUT_S = '" + std::string(t) + "': must be a number of seconds in (0, 3600]"};
+    o.timeout_s = v;
+  }
+  return o;
 }
 
 int cmd_run(const Args& a, const Design& d) {
   RunOptions opt;
   opt.out_dir = a.out;
+  opt.plot = a.plot;
   opt.quiet = a.quiet;
   opt.log = &std::cout;
   opt.errors = &std::cerr;
+  opt.sweep.threads = a.threads;
   const RunResult r = run_design(d, opt);
   if (!r.ok()) std::cerr << "freeflex: failed: " << r.message << '\n';
   return r.exit_code();
@@ -129,7 +188,7 @@ int main(int argc, char** argv) {
   Args args;
   CLI::App* modes = app.add_subcommand("modes", "elastic natural frequencies of the design's beam (ascending)");
   modes->add_option("DESIGN", args.design, "design file (TOML)")->required();
-  modes->add_option("--noa", args.noa_text, "number of admissible functions, 1..100 (default: the design's model.noa)");
+  modes->add_option("--noa", args.noa_text, "number of shape functions (admissible functions, or finite-element modes kept), 1..100 (default: the design's model.noa)");
   modes->add_option("--format", args.format, "table, csv or json")->check(CLI::IsMember({"table", "csv", "json"}));
   modes->add_option("--spin", args.spin_text,
                     "steady spin rate [rad/s]: frequencies with the reference frame held spinning (default 0 with --stiffening)");
@@ -139,6 +198,8 @@ int main(int argc, char** argv) {
   run->add_option("DESIGN", args.design, "design file (TOML)")->required();
   run->add_option("--out", args.out, "output directory (created if needed)")->required();
   run->add_flag("--quiet", args.quiet, "no progress or warnings; a failure's reason is still printed");
+  run->add_option("--threads", args.threads, "threads of a [sweep] (default 0: every core); results do not depend on it")
+      ->check(CLI::Range(0, 4096));
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {
@@ -154,6 +215,7 @@ int main(int argc, char** argv) {
   }
   try {
     if (!args.noa_text.empty()) args.noa = parse_noa(args.noa_text);
+    args.plot = plot_options_from_environment();
   } catch (const UsageError& e) {
     std::cerr << "freeflex: " << e.message << '\n';
     return kExitBadInput;

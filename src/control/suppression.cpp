@@ -41,6 +41,21 @@ void check_problem(const FlexibleBody& body, const SuppressionProblem& p) {
 
 }  // namespace
 
+ActuatorCommandFunction maneuver_actuator_commands(const FlownManeuver& m, const std::vector<int>& actuators) {
+  std::vector<int> slot;  // position of each maneuver actuator among the feedback ones
+  for (int a : m.actuators)
+    slot.push_back(static_cast<int>(std::find(actuators.begin(), actuators.end(), a) - actuators.begin()));
+  const auto commands = m.commands;
+  const double end = m.duration_s;
+  return [commands, slot, end](const Instant& at, Eigen::Ref<Eigen::VectorXd> u) {
+    u.setZero();
+    if (at.piece_mid > end) return;
+    Eigen::VectorXd c(static_cast<Eigen::Index>(slot.size()));
+    commands(at, c);
+    for (std::size_t k = 0; k < slot.size(); ++k) u(slot[k]) = c(static_cast<Eigen::Index>(k));
+  };
+}
+
 void validate(const SuppressionOptions& o) {
   SimulationOptions sim = o.simulation;
   sim.duration_s = std::max(sim.duration_s, sim.output_step_s);  // the chain sets the duration itself
@@ -69,18 +84,7 @@ SuppressionResult suppress_vibration(const FlexibleBody& body, const Suppression
   ActuatorCommandFunction u0;
   if (p.maneuver) {
     const FlownManeuver& m = *p.maneuver;
-    std::vector<int> slot;  // position of each maneuver actuator among the feedback ones
-    for (int a : m.actuators)
-      slot.push_back(static_cast<int>(std::find(p.actuators.begin(), p.actuators.end(), a) - p.actuators.begin()));
-    const auto commands = m.commands;
-    const double end = m.duration_s;
-    u0 = [commands, slot, end](const Instant& at, Eigen::Ref<Eigen::VectorXd> u) {
-      u.setZero();
-      if (at.piece_mid > end) return;
-      Eigen::VectorXd c(static_cast<Eigen::Index>(slot.size()));
-      commands(at, c);
-      for (std::size_t k = 0; k < slot.size(); ++k) u(slot[k]) = c(static_cast<Eigen::Index>(k));
-    };
+    u0 = maneuver_actuator_commands(m, p.actuators);
     nominal_ex = m.driving(p.loads);
     nominal = m.nominal();
     if (m.duration_s > p.horizon_s) {

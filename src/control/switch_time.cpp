@@ -21,8 +21,10 @@ std::string fmt(double v) { return fmt10(v); }
 
 /// The first problem of `o`, or "".
 std::string options_problem(const SwitchTimeOptions& o) {
-  if (!(o.rtol > 0.0) || !(o.atol > 0.0) || !(o.constraint_tolerance > 0.0) || o.starts < 1 || o.max_evaluations < 1)
-    return "rtol, atol, constraint_tolerance must be > 0 and starts, max_evaluations >= 1";
+  if (!(o.rtol > 0.0) || !(o.atol > 0.0) || !(o.constraint_tolerance > 0.0) || o.starts < 1 || o.max_evaluations < 1 ||
+      o.max_steps_per_simulation < 0)
+    return "rtol, atol, constraint_tolerance must be > 0, starts, max_evaluations >= 1 and max_steps_per_simulation "
+           ">= 0";
   return "";
 }
 
@@ -240,6 +242,7 @@ SwitchTimeResult design_switch_times(const FlexibleBody& body, int actuator, dou
   P.dtheta = rotation_rad;
   P.rtol = o.rtol;
   P.atol = o.atol;
+  P.max_total_steps = o.max_steps_per_simulation;
   P.progress = o.progress;
   P.modes = target_modes(body, actuator, rotation_rad, modes, where);
   const double Tstar = 2.0 * std::sqrt(P.I_o * P.dtheta / P.tau);

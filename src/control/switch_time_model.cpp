@@ -137,6 +137,7 @@ bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end,
     io.method = IntegratorOptions::Method::Adams;  // undamped oscillations, not stiff
     io.rtol = P.rtol;
     io.atol = P.atol;
+    io.max_total_steps = P.max_total_steps;
     const IntegrationResult ir = integrate(sys, Eigen::VectorXd::Zero(2 * N), {0.0, T}, sw, io);
     if (!ir.ok()) {
       P.last_error = ir.message;

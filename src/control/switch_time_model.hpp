@@ -44,6 +44,7 @@ struct Problem {
   double scale = 1.0;  // sqrt(I_o) θ'* : modal constraints divided by it
   TargetModes modes;
   double rtol = 1e-11, atol = 1e-14;
+  long max_total_steps = 0;  ///< of each simulation (0: no limit)
   int simulations = 0;
   std::function<void(int)> progress;  // SwitchTimeOptions::progress
   std::string last_error;

@@ -82,9 +82,9 @@ FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) cons
   Kr.block(0, 3, 2, n) = (thdd * fr.CJe2 - thd * thd * fr.Ce2) * mi.Phi_bar;
   Kr.block(2, 3, 1, n) = Rdd.dot(fr.CJe2) * mi.Phi_bar;
   Kr.bottomRightCorner(n, n) = mi.K - thd * thd * mi.M;
-  if (body_.geometric_stiffening())  // eq. 13.9: the tension the nominal motion sets up
+  if (body_.geometric_stiffening())  // eq. 14.9: the tension the nominal motion sets up
     Kr.bottomRightCorner(n, n) += thd * thd * mi.G_c - fr.Ce1.dot(Rdd) * mi.H_bar;
-  Kr.middleCols(2, 1 + n) -= dG;  // configuration-dependent loads (eq. 13.7 included)
+  Kr.middleCols(2, 1 + n) -= dG;  // configuration-dependent loads (eq. 14.7 included)
 
   // ∂(residual)/∂z'
   Eigen::MatrixXd Cr = Eigen::MatrixXd::Zero(N, N);
@@ -150,7 +150,7 @@ const Eigen::VectorXd& FirstOrderModel::rhs(Data& w, const Instant& at, const Ei
 const Eigen::VectorXd& FirstOrderModel::prescribed_rhs(Data& w, const Instant& at,
                                                        const Eigen::Ref<const Eigen::VectorXd>& xq,
                                                        const Eigen::Ref<const Eigen::VectorXd>& u1) const {
-  // eq. 13.10: the q rows of eq. 7.1 with R1 = θ1 = 0, M q'' = f_q
+  // eq. 14.10: the q rows of eq. 7.1 with R1 = θ1 = 0, M q'' = f_q
   const int n = body_.n(), N = body_.dofs();
   w.x1.setZero(2 * N);
   w.x1.segment(3, n) = xq.head(n);
@@ -198,7 +198,7 @@ const Eigen::Matrix2d& FirstOrderModel::forces(Data& w, const Instant& at, const
         mi.Phi_bar.transpose() * (Ce1.dot(Rdd) * th1);
   fq.noalias() -= mi.K * w.q;
   fq.noalias() += (thd * thd) * mi.M * w.q;
-  if (body_.geometric_stiffening()) {  // eq. 13.9
+  if (body_.geometric_stiffening()) {  // eq. 14.9
     fq.noalias() -= (thd * thd) * mi.G_c * w.q;
     fq.noalias() += Ce1.dot(Rdd) * mi.H_bar * w.q;
   }

@@ -33,9 +33,14 @@ void applied_force(const ForceElement& el, double psi, Eigen::Vector2d& f, Eigen
 
 FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> elements,
                            std::vector<double> damping_ratios, bool geometric_stiffening)
+    : FlexibleBody(beam, noa, BasisOptions{}, std::move(elements), std::move(damping_ratios), geometric_stiffening) {}
+
+FlexibleBody::FlexibleBody(const Beam& beam, int modes, const BasisOptions& basis,
+                           std::vector<ForceElement> elements, std::vector<double> damping_ratios,
+                           bool geometric_stiffening)
     : beam_(beam),
-      basis_(make_basis(beam, noa)),
-      mi_(geometric_stiffening ? stiffened_modal_integrals(beam_, basis_) : modal_integrals(beam_, basis_)),
+      basis_(make_basis(beam_, modes, basis)),
+      mi_(geometric_stiffening ? stiffened_modal_integrals(beam_, *basis_) : modal_integrals(beam_, *basis_)),
       elements_(std::move(elements)),
       stiffening_(geometric_stiffening) {
   for (const auto& e : elements_) {
@@ -46,13 +51,13 @@ FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> 
       throw std::invalid_argument(os.str());
     }
     const double x = beam_.x_of(e.position_m);
-    const BasisValues v = basis_.evaluate(x);
+    const BasisValues v = basis_->evaluate(x);
     x_.push_back(x);
     phi_.push_back(v.phi);
     dphi_.push_back(v.dphi);
-    H_.push_back(stiffening_ ? foreshortening_matrix(beam_, basis_, x) : Eigen::MatrixXd());
+    H_.push_back(stiffening_ ? foreshortening_matrix(beam_, *basis_, x) : Eigen::MatrixXd());
   }
-  const int n = basis_.size(), N = 3 + n;
+  const int n = basis_->size(), N = 3 + n;
   // Schur complement of the rigid block of the rest mass matrix (eq. 6.8).
   const Eigen::MatrixXd M0 = mass_matrix(0.0, Eigen::VectorXd::Zero(n));
   M_condensed_ = mi_.M - M0.block(3, 0, n, 3) * M0.topLeftCorner<3, 3>().ldlt().solve(M0.block(0, 3, 3, n));
@@ -84,7 +89,7 @@ Eigen::MatrixXd FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const E
   const int n = this->n();
   const Eigen::Matrix2d C = rot(theta);
   if (stiffening_) {
-    // eq. 13.5: s(q) = [S_o − ½ qᵀH̄q, Φ̄q], B(q) = [−(H̄q)ᵀ; Φ̄], I(q) = I_o + qᵀ(M − G_c)q
+    // eq. 14.5: s(q) = [S_o − ½ qᵀH̄q, Φ̄q], B(q) = [−(H̄q)ᵀ; Φ̄], I(q) = I_o + qᵀ(M − G_c)q
     const Eigen::VectorXd Hq = mi_.H_bar * q;
     const Eigen::Vector2d s(mi_.S_o - 0.5 * q.dot(Hq), mi_.Phi_bar.dot(q));
     Eigen::MatrixXd B(2, n);
@@ -150,7 +155,7 @@ void element_force_into(const FlexibleBody& body, int e, double theta, const Eig
   g.head<2>() = f;
   g(2) = -w(0) * ua + w(1) * xa;
   g.tail(n) = phi.transpose() * w(1);
-  // eq. 13.7: the point has moved towards o by h_a = ½ qᵀH_a q, and δp_x = −sgn(x_a)(H_a q)ᵀδq
+  // eq. 14.7: the point has moved towards o by h_a = ½ qᵀH_a q, and δp_x = −sgn(x_a)(H_a q)ᵀδq
   Eigen::VectorXd Haq;
   double sa = 0.0, ha = 0.0;
   if (body.geometric_stiffening() && xa != 0.0) {
@@ -248,7 +253,7 @@ void detail::add_element_force(const FlexibleBody& body, int e, double theta, co
   G.head<2>() += scale * f;
   G(2) += scale * (-w(0) * ua + w(1) * xa);
   G.tail(n).noalias() += (scale * w(1)) * phi.transpose();
-  const bool shortens = body.geometric_stiffening() && xa != 0.0;  // eq. 13.7
+  const bool shortens = body.geometric_stiffening() && xa != 0.0;  // eq. 14.7
   const double sa = xa > 0.0 ? 1.0 : -1.0;
   if (shortens) {
     const Eigen::MatrixXd& Ha = body.element_foreshortening(e);

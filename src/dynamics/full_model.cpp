@@ -52,8 +52,8 @@ void FullModel::bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Re
   const auto qd = zd.tail(n);
   const Eigen::Matrix2d C = rot(th);
   if (body_.geometric_stiffening()) {
-    // eq. 13.6: R row −θ'² C s + 2θ' C J B q' − C e1 (q'ᵀH̄q'); θ row 2θ' qᵀ(M − G_c)q';
-    // q row −θ'² (M − G_c) q + K q, with s(q), B(q) of eq. 13.5
+    // eq. 14.6: R row −θ'² C s + 2θ' C J B q' − C e1 (q'ᵀH̄q'); θ row 2θ' qᵀ(M − G_c)q';
+    // q row −θ'² (M − G_c) q + K q, with s(q), B(q) of eq. 14.5
     const Eigen::VectorXd Hq = mi.H_bar * q;
     const Eigen::Vector2d s(mi.S_o - 0.5 * q.dot(Hq), mi.Phi_bar.dot(q));
     const Eigen::Vector2d Bqd(-Hq.dot(qd), mi.Phi_bar.dot(qd));
@@ -167,7 +167,7 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
 
 bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                               const Eigen::Ref<const Eigen::VectorXd>& commands) const {
-  // eq. 13.6 in body axes, solved by the kept inverse of 𝕄_b(0) and a 4 x 4 Woodbury core.
+  // eq. 14.6 in body axes, solved by the kept inverse of 𝕄_b(0) and a 4 x 4 Woodbury core.
   const ModalIntegrals& mi = body_.integrals();
   const int N = body_.dofs(), n = body_.n();
   const auto q = x.segment(3, n);
@@ -200,7 +200,7 @@ bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& 
     g.tail(N - 2) -= d.Dzd.tail(N - 2);
   }
   // 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ with U = [e_x, e_y, e_θ, v], v = [0; 0; 0; H̄q] and
-  // S(x,θ) = −Φ̄q, S(y,θ) = −½ qᵀH̄q, S(θ,θ) = qᵀ(M − G_c)q, S(x,v) = −1 (eq. 13.5):
+  // S(x,θ) = −Φ̄q, S(y,θ) = −½ qᵀH̄q, S(θ,θ) = qᵀ(M − G_c)q, S(x,v) = −1 (eq. 14.5):
   // w = y − W U S (I + Uᵀ W U S)⁻¹ Uᵀ y, y = W g, W = 𝕄_b(0)⁻¹.
   const Eigen::MatrixXd& W = rest_inverse_;
   Eigen::VectorXd& x_dot = d.x_dot;
@@ -251,7 +251,7 @@ bool FullModel::prescribed_rhs(Data& d, const RigidState& rigid, const Eigen::Re
   const Eigen::Matrix2d C = rot(th);
   const Eigen::Vector2d a = C.transpose() * rigid.acc.head<2>();  // R'' in body axes
   detail::generalized_force(body_, th, q, commands, d.G);
-  // eq. 13.10: f = Q − Φ̄ᵀ a_y + a_x H̄ q − Φ̃ᵀ θ'' + θ'² (M − G_c) q − K q − D_q z'
+  // eq. 14.10: f = Q − Φ̄ᵀ a_y + a_x H̄ q − Φ̃ᵀ θ'' + θ'² (M − G_c) q − K q − D_q z'
   auto f = d.b.tail(n);
   f = d.G.tail(n) - a(1) * mi.Phi_bar.transpose() - thdd * mi.Phi_tilde.transpose();
   d.Mq.noalias() = mi.M * q;
@@ -293,7 +293,7 @@ Eigen::Vector2d FullModel::linear_momentum(const Eigen::Ref<const Eigen::VectorX
   const int N = body_.dofs(), n = body_.n();
   const Eigen::Matrix2d C = rot(x(2));
   if (body_.geometric_stiffening()) {
-    // ∂T/∂R' = m R' + C (θ' J s(q) + B(q) q'), eq. 13.8
+    // ∂T/∂R' = m R' + C (θ' J s(q) + B(q) q'), eq. 14.8
     const auto q = x.segment(3, n);
     const auto qd = x.tail(n);
     const Eigen::VectorXd Hq = mi.H_bar * q;
@@ -320,7 +320,7 @@ double FullModel::angular_momentum(const Eigen::Ref<const Eigen::VectorXd>& x) c
   // H = ∫ (r × r') dm with r = R + C p (eq. 6.7); a × b = aᵀ Jᵀ b in the plane.
   auto cross = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a(0) * b(1) - a(1) * b(0); };
   if (body_.geometric_stiffening()) {
-    // eq. 13.8: H = R × P + (C s) × R' + θ' I(q) + Φ̃ q', P the linear momentum
+    // eq. 14.8: H = R × P + (C s) × R' + θ' I(q) + Φ̃ q', P the linear momentum
     const Eigen::VectorXd Hq = mi.H_bar * q;
     const Eigen::Vector2d ss(mi.S_o - 0.5 * q.dot(Hq), mi.Phi_bar.dot(q));
     const double Iq = mi.I_o + q.dot((mi.M - mi.G_c) * q);

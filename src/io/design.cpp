@@ -2,6 +2,7 @@
 // io/design_*.cpp), and what a design derives (force elements, excitation).
 #include "freeflex/io/design.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -32,6 +33,10 @@ std::vector<ForceElement> Design::force_elements() const {
   return e;
 }
 
+FlexibleBody Design::body() const {
+  return FlexibleBody(Beam(beam), noa, basis, force_elements(), damping_ratios, geometric_stiffening);
+}
+
 Excitation Design::excitation() const {
   Excitation ex;
   for (const auto& l : loads) ex.profiles.emplace_back(l.profile);
@@ -58,11 +63,13 @@ Design parse_design(const std::string& text, const std::string& source) {
   Section root(&tbl, "", problems, 0);
   Design d;
   d.source = source;
+  d.digest = 1469598103934665603ULL;  // FNV-1a 64
+  for (unsigned char ch : text) d.digest = (d.digest ^ ch) * 1099511628211ULL;
   d.title = root.string("title", false).value_or(d.title);
-  Section model = root.table("model");
-  d.noa = static_cast<int>(model.integer("noa", 1, kMaxNoa, false).value_or(d.noa));
-  d.geometric_stiffening = model.boolean("geometric_stiffening", false).value_or(d.geometric_stiffening);
-  model.finish();
+  if (d.title.size() > lim::kMaxTitleBytes)  // it reaches every figure script and summary.json
+    root.problem("title", "title is " + std::to_string(d.title.size()) + " bytes long; at most " +
+                              std::to_string(lim::kMaxTitleBytes) + " (it is printed on every figure)");
+  io_detail::read_model(root, d);
   io_detail::read_beam(root, d);
   Section out = root.table("output");
   d.plots = out.boolean("plots", false).value_or(d.plots);
@@ -77,6 +84,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   io_detail::read_maneuver(root, d, outputs, rejected_actuators);
   io_detail::read_controller(root, d, outputs, rejected_actuators);
   io_detail::read_bang_bang(root, d, outputs, problems, rejected_actuators);
+  io_detail::read_sensors_lqg_sweep(root, d, outputs);
   root.finish();
   outputs.check(problems);
   if (problems.empty()) {
@@ -88,6 +96,11 @@ Design parse_design(const std::string& text, const std::string& source) {
   }
   if (!problems.empty()) throw DesignError(problems.list());
   return d;
+}
+
+long integrator_step_budget(int noa) {
+  const double n = 3.0 + noa;
+  return static_cast<long>(lim::kMaxIntegratorWork / std::max(n * n, 400.0));
 }
 
 Design load_design(const std::string& path) {

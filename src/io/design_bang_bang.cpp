@@ -37,7 +37,7 @@ double rotation_integral(const TimeProfile& prof, double T) {
 /// the beam by a positive angle (design_switch_times needs Δθ > 0).
 void check_bang_bang_body(Section& b, const Design& d) {
   const BangBangStudy& st = *d.bang_bang;
-  const FlexibleBody body(Beam(d.beam), d.noa, d.force_elements(), d.damping_ratios);
+  const FlexibleBody body = d.body();
   const double L = body.beam().length();
   const ModalIntegrals& mi = body.integrals();
   const ActuatorSpec& a = d.actuators[static_cast<std::size_t>(st.actuator) - d.loads.size()];

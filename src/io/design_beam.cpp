@@ -1,4 +1,6 @@
-// [beam]: a uniform beam or segments, the reference point o, a hub and point masses.
+// [beam]: a uniform (or linearly tapered) beam or segments, the reference point o, a hub
+// and point masses. A segment's mass per length and stiffness are a number or [start, end]
+// (varying linearly along the segment).
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -22,27 +24,26 @@ void read_beam(Section& root, Design& d) {
                          "[[beam.segment]] tables (piecewise), not both");
   } else if (segs.empty()) {
     auto L = b.number("length_m", kLength, true);
-    std::optional<double> mass;
+    std::optional<std::pair<double, std::optional<double>>> mu;
     if (b.has("mass_kg") && b.has("mass_per_length_kg_m")) {
       b.problem("mass_kg", "beam: give mass_kg or mass_per_length_kg_m, not both");
       b.number("mass_kg", kMass, false);
-      b.number("mass_per_length_kg_m", kMassPerLength, false);
+      b.number_or_pair("mass_per_length_kg_m", kMassPerLength, false);
     } else if (b.has("mass_per_length_kg_m")) {
-      auto mu = b.number("mass_per_length_kg_m", kMassPerLength, true);
-      if (mu && L) mass = *mu * *L;
-    } else {
-      mass = b.number("mass_kg", kMass, true);
+      mu = b.number_or_pair("mass_per_length_kg_m", kMassPerLength, true);
+    } else if (auto mass = b.number("mass_kg", kMass, true); mass && L) {
+      mu = std::make_pair(*mass / *L, std::optional<double>());
     }
-    auto ei = b.number("bending_stiffness_Nm2", kStiffness, true);
-    if (L && mass && ei) p.segments.push_back({*L, *mass / *L, *ei});
+    auto ei = b.number_or_pair("bending_stiffness_Nm2", kStiffness, true);
+    if (L && mu && ei) p.segments.push_back({*L, mu->first, ei->first, mu->second, ei->second});
   } else {
     bool ok = true;
     for (auto& s : segs) {
       auto L = s.number("length_m", kLength, true);
-      auto mu = s.number("mass_per_length_kg_m", kMassPerLength, true);
-      auto ei = s.number("bending_stiffness_Nm2", kStiffness, true);
+      auto mu = s.number_or_pair("mass_per_length_kg_m", kMassPerLength, true);
+      auto ei = s.number_or_pair("bending_stiffness_Nm2", kStiffness, true);
       s.finish();
-      if (L && mu && ei) p.segments.push_back({*L, *mu, *ei});
+      if (L && mu && ei) p.segments.push_back({*L, mu->first, ei->first, mu->second, ei->second});
       else ok = false;
     }
     if (!ok) p.segments.clear();
@@ -55,7 +56,7 @@ void read_beam(Section& root, Design& d) {
   double length = 0.0, total_mass = 0.0;
   for (const auto& s : p.segments) {
     length += s.length_m;
-    total_mass += s.mass_per_length_kg_m * s.length_m;
+    total_mass += s.mass_per_length_end_kg_m ? s.mass() : s.mass_per_length_kg_m * s.length_m;
   }
   // mass_kg is checked where it is given; a mass that comes from mass per length is checked here
   if (!p.segments.empty() && (!b.has("mass_kg") || !segs.empty()) &&

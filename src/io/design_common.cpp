@@ -31,9 +31,13 @@ bool check_count(Section& s, const std::string& key, const std::string& lead, co
   return false;
 }
 
-std::string lower_trimmed(const std::string& s) {
+std::string trimmed(const std::string& s) {
   const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
-  std::string t = b == std::string::npos ? "" : s.substr(b, e - b + 1);
+  return b == std::string::npos ? "" : s.substr(b, e - b + 1);
+}
+
+std::string lower_trimmed(const std::string& s) {
+  std::string t = trimmed(s);
   for (char& ch : t) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   return t;
 }

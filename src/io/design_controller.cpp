@@ -67,14 +67,22 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
     c.problem("weight_elastic", "controller: every state weight is zero; Q must weight something");
   auto grid = c.number("grid_step_s", Range::positive(), false);
   st.grid_step_s = grid.value_or(st.grid_step_s);
-  if (horizon && (grid || !c.has("grid_step_s")))
-    check_count(
-        c, grid ? "grid_step_s" : "horizon_s",
-        grid ? c.key_path("grid_step_s") + " = " + shortest(*grid)
-             : c.key_path("horizon_s") + " = " + shortest(*horizon),
-        grid ? "horizon_s = " + shortest(*horizon) : "grid_step_s = " + shortest(st.grid_step_s) + " (the default)",
-        *horizon, st.grid_step_s, "TV-LQR gain grid points", lim::kMaxOutputRows,
-        "raise grid_step_s or shorten horizon_s");
+  if (horizon && (grid || !c.has("grid_step_s"))) {
+    const std::string key = grid ? "grid_step_s" : "horizon_s";
+    const std::string lead = grid ? c.key_path("grid_step_s") + " = " + shortest(*grid)
+                                  : c.key_path("horizon_s") + " = " + shortest(*horizon);
+    const std::string other =
+        grid ? "horizon_s = " + shortest(*horizon) : "grid_step_s = " + shortest(st.grid_step_s) + " (the default)";
+    // the gains stored: grid points x actuators x the first-order state, 2 (3 + noa)
+    const double per_point = static_cast<double>(m) * 2.0 * (3 + d.noa);
+    if (check_count(c, key, lead, other, *horizon, st.grid_step_s, "TV-LQR gain grid points", lim::kMaxOutputRows,
+                    "raise grid_step_s or shorten horizon_s") &&
+        m > 0)
+      check_count(c, key, lead + " and " + std::to_string(m) + " actuator(s) at noa = " + std::to_string(d.noa), other,
+                  *horizon, st.grid_step_s, "TV-LQR gain grid points of " + shortest(per_point) + " doubles each",
+                  std::floor(lim::kMaxGainStorage / per_point),
+                  "raise grid_step_s, shorten horizon_s or use fewer actuators (the gains are kept in memory)");
+  }
   auto until = c.number("simulate_until_s", kTime, false);
   st.simulate_until_s = until.value_or(st.horizon_s);
   if (auto name = c.string("figure", false, true)) st.figure = *name;

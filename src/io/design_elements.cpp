@@ -99,7 +99,16 @@ std::vector<std::string> read_loads_and_actuators(Section& root, Design& d) {
       s.problem("name", s.key_path("name") + " = \"" + name + "\" is used twice; load and actuator names must be unique");
     seen.push_back(name);
   };
-  for (auto& s : root.table_array("load")) {
+  std::vector<Section> loads = root.table_array("load"), actuators = root.table_array("actuator");
+  // each element adds work to every step of every simulation: bounded before any
+  if (loads.size() + actuators.size() > static_cast<std::size_t>(lim::kMaxForceElements)) {
+    root.problem(loads.empty() ? "actuator" : "load",
+                 std::to_string(loads.size()) + " [[load]] and " + std::to_string(actuators.size()) +
+                     " [[actuator]] tables; at most " + std::to_string(lim::kMaxForceElements) + " together");
+    return rejected;
+  }
+  std::size_t profile_times = 0;
+  for (auto& s : loads) {
     bool ok = true;
     std::string name;
     auto e = read_element(s, L, ok, name);
@@ -107,8 +116,12 @@ std::vector<std::string> read_loads_and_actuators(Section& root, Design& d) {
     s.finish();
     check_name(name, s);
     if (e && ok && prof) d.loads.push_back({*e, *prof});
+    if (prof && (profile_times += prof->times().size()) > lim::kMaxProfileTimes)
+      s.problem("profile", s.key_path("profile") + ": the load profiles have " + std::to_string(profile_times) +
+                               " times_s entries up to here; at most " +
+                               std::to_string(lim::kMaxProfileTimes) + " together (each is a breakpoint of every simulation)");
   }
-  for (auto& s : root.table_array("actuator")) {
+  for (auto& s : actuators) {
     bool ok = true;
     std::string name;
     auto e = read_element(s, L, ok, name);

@@ -13,21 +13,45 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
   Section s = root.table("free_vibration");
   if (!s.present()) return;
   FreeVibrationStudy fv;
-  if (auto v = s.integer_array("noa_sweep", 1, kMaxNoa, false)) fv.noa_sweep.assign(v->begin(), v->end());
+  // noa: functions of the paper's basis, or modes kept from the finite-element model
+  const int most = max_modes(d);
+  if (auto v = s.integer_array("noa_sweep", 1, most, false)) {
+    if (v->size() > static_cast<std::size_t>(lim::kMaxNoaSweep))
+      s.problem("noa_sweep", s.key_path("noa_sweep") + " has " + std::to_string(v->size()) + " entries; at most " +
+                                 std::to_string(lim::kMaxNoaSweep) + " (each is a row block of the table)");
+    else
+      fv.noa_sweep.assign(v->begin(), v->end());
+  }
   fv.modes = static_cast<int>(s.integer("modes", 1, kMaxNoa, false).value_or(fv.modes));
   fv.paper_table = s.boolean("paper_table", false).value_or(fv.paper_table);
   fv.table_name = s.string("table_name", false, true).value_or(fv.table_name);
   outputs.named(s, "table_name", fv.table_name, {".csv"});
-  if (auto v = s.number_array("spin_rates_deg_s", Range::nonnegative().supported(-kInf, lim::kMaxRate_deg_s), false))
-    for (double w : *v) fv.spin_rates.push_back(w * M_PI / 180.0);
+  // each spin rate is two generalized eigenproblems of the model's size: bounded as noa_sweep
+  constexpr std::size_t kMaxSpinRates = lim::kMaxNoaSweep;
+  if (auto v = s.number_array("spin_rates_deg_s", Range::nonnegative().supported(-kInf, lim::kMaxRate_deg_s), false)) {
+    if (v->size() > kMaxSpinRates)
+      s.problem("spin_rates_deg_s", s.key_path("spin_rates_deg_s") + " has " + std::to_string(v->size()) +
+                                        " entries; at most " + std::to_string(kMaxSpinRates) +
+                                        " (each is a row block of the spinning table)");
+    else
+      for (double w : *v) fv.spin_rates.push_back(w * M_PI / 180.0);
+  }
   fv.spinning_table_name = s.string("spinning_table_name", false, true).value_or(fv.spinning_table_name);
   if (!fv.spin_rates.empty()) outputs.named(s, "spinning_table_name", fv.spinning_table_name, {".csv"});
-  for (auto& m : s.table_array("mode_shape")) {
+  std::vector<Section> shapes = s.table_array("mode_shape");
+  if (shapes.size() > static_cast<std::size_t>(lim::kMaxModeShapes)) {
+    s.problem("mode_shape", "free_vibration.mode_shape: " + std::to_string(shapes.size()) + " tables; at most " +
+                                std::to_string(lim::kMaxModeShapes) + " (each writes three files)");
+    shapes.clear();
+  }
+  double rows = 0;  // of all mode shapes
+  for (auto& m : shapes) {
     ModeShapeRequest r;
     auto name = m.string("name", true, true);
-    r.noa = static_cast<int>(m.integer("noa", 1, kMaxNoa, false).value_or(d.noa));
+    r.noa = static_cast<int>(m.integer("noa", 1, most, false).value_or(d.noa));
     auto mode = m.integer("mode", 1, r.noa, true);
-    r.points = static_cast<int>(m.integer("points", 2, 100000, false).value_or(r.points));
+    r.points = static_cast<int>(m.integer("points", 2, lim::kMaxModeShapePoints, false).value_or(r.points));
+    rows += r.points;
     m.finish();
     if (name) outputs.named(m, "name", *name, {".csv", ".gp", ".png"});
     if (name && mode) {
@@ -36,6 +60,11 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
       fv.mode_shapes.push_back(r);
     }
   }
+  if (rows > lim::kMaxModeShapeRows)
+    s.problem("mode_shape", "free_vibration.mode_shape: the " + std::to_string(shapes.size()) +
+                                " mode shapes' points add up to " + std::to_string(static_cast<long long>(rows)) +
+                                " rows; at most " + std::to_string(static_cast<long long>(lim::kMaxModeShapeRows)) +
+                                ": give fewer points or fewer mode shapes");
   s.finish();
   d.free_vibration = fv;
 }

@@ -1,9 +1,12 @@
 // [maneuver]: the rigid maneuver to optimize (actuators, boundary states, objective,
 // duration) and how (transcription, mesh, Ipopt and its options).
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <limits>
 
 #include "io/design_sections.hpp"
+#include "trajopt/ipopt_options.hpp"
 
 namespace freeflex::io_detail {
 namespace {
@@ -33,6 +36,126 @@ Eigen::Matrix<double, 6, 1> read_state(Section& m, const std::string& key) {
       M_PI / 180.0;
   s.finish();
   return x;
+}
+
+using Kind = Section::RawEntry::Kind;
+
+/// Unknowns of the NLP on a mesh of `intervals` (trajopt's CollocationNlp layout): the states and
+/// the controls at each point, the compressed form's midpoint controls, the free duration.
+double nlp_unknowns(const ManeuverStudy& st, int intervals, int noa) {
+  const double N = intervals, nu = static_cast<double>(st.problem.actuators.size());
+  const Transcription tr = st.options.transcription;
+  const double points = tr == Transcription::HermiteSimpson ? 2 * N + 1 : N + 1;
+  // the rigid state, and with `elastic` the first-order state x1 (trajopt/elastic_dynamics.hpp)
+  const int modes = st.problem.elastic_modes > 0 ? st.problem.elastic_modes : noa;
+  const double states = 6 + (st.problem.elastic ? 4 + 2 * modes : 0);
+  return points * (states + nu) + (tr == Transcription::HermiteSimpsonCompressed ? N * nu : 0) +
+         (st.problem.free_time ? 1 : 0);
+}
+
+/// [maneuver.ipopt]: every entry checked against Ipopt's own registry (name, type, bounds,
+/// valid strings) and against what this build and freeflex allow, all at once, before any
+/// work. The derivative checker becomes TrajoptOptions::derivative_test (first mesh round
+/// only, its verdict counted); the rest is passed to Ipopt as written.
+void read_ipopt_options(Section& m, ManeuverStudy& st, Outputs& outputs, int noa) {
+  Section ip = m.table("ipopt");
+  if (!ip.present()) return;
+  TrajoptOptions& o = st.options;
+  for (const auto& e : ip.raw_entries()) {
+    const std::string& key = e.key;
+    const std::string value = trimmed(e.text);
+    const std::string shown = e.kind == Kind::String || e.kind == Kind::Boolean ? "\"" + e.text + "\"" : e.text;
+    const std::string lead = ip.key_path(key) + " = " + (e.kind == Kind::Boolean ? (e.text == "yes" ? "true" : "false") : shown);
+    const detail::OptionText kind = e.kind == Kind::String    ? detail::OptionText::String
+                                    : e.kind == Kind::Integer ? detail::OptionText::Integer
+                                    : e.kind == Kind::Float   ? detail::OptionText::Number
+                                                              : detail::OptionText::Boolean;
+    if (key == "option_file_name") {
+      ip.problem(key, lead + ": options files are not read; give each option in [maneuver.ipopt], where it is checked");
+      continue;
+    }
+    const std::string why = detail::ipopt_option_problem(key, value, kind);
+    if (!why.empty()) {
+      ip.problem(key, why.rfind("must", 0) == 0 ? lead + ", " + why : lead + " " + why);
+      continue;
+    }
+    // Debian's Ipopt is built with MUMPS only: any other solver makes Ipopt abort the
+    // whole process (it tries to load libhsl.so)
+    if (key == "linear_solver" && lower_trimmed(value) != "mumps") {
+      ip.problem(key, lead + ", must be \"mumps\" (the only linear solver this Ipopt has)");
+      continue;
+    }
+    if (key == "linear_system_scaling" && lower_trimmed(value) == "mc19") {
+      ip.problem(key, lead + ", must be \"none\" or \"slack-based\" (MC19 is part of HSL, which this Ipopt lacks)");
+      continue;
+    }
+    // freeflex writes Ipopt's log there, into the run's directory with the other results
+    // (and replaced with them), so it must be a plain file name.
+    if (key == "output_file") {
+      if (!plain_name(e.text, ".")) {
+        ip.problem(key, lead +
+                            ", must be a file name of 1 to 64 letters, digits, '_', '-' or '.', not starting with "
+                            "'.' (Ipopt writes it into the output directory)");
+        continue;
+      }
+      outputs.named(ip, key, e.text, {""});
+    }
+    if (key == "max_iter" && std::stoll(value) > lim::kMaxIterations) {  // the registry allowed it: an integer
+      ip.problem(key, lead + ", must be at most " + std::to_string(lim::kMaxIterations) + " (the supported range)");
+      continue;
+    }
+    if (key == "derivative_test") {  // freeflex runs the checker on the first mesh only and counts its errors
+      const std::string test = lower_trimmed(value);
+      // the checker's work grows like n^3 (first order) or faster (second order) in the
+      // NLP's unknowns, and it prints nothing until it ends: bound n
+      const double n = nlp_unknowns(st, o.intervals, noa);
+      const double most = test == "first-order" ? lim::kMaxDerivativeTestUnknowns : lim::kMaxSecondOrderTestUnknowns;
+      if (test != "none" && n > most) {
+        ip.problem(key, lead + " with maneuver.intervals = " + std::to_string(o.intervals) + " tests " +
+                            std::to_string(static_cast<long long>(n)) + " NLP unknowns; at most " +
+                            std::to_string(static_cast<long long>(most)) +
+                            " for this test: check the derivatives on fewer intervals (they do not depend on the mesh)");
+        continue;
+      }
+      o.derivative_test = test;
+      continue;
+    }
+    o.ipopt_options.emplace_back(key, e.text);
+  }
+}
+
+/// The optimizer's work, bounded before any work: Ipopt iterations x NLP unknowns, summed
+/// over the mesh-refinement rounds (each round's mesh at most doubles, up to
+/// max_intervals). Reported at the first of max_iterations, intervals, mesh_refinements
+/// the file gives.
+void check_ipopt_work(Section& m, const ManeuverStudy& st, int noa) {
+  const TrajoptOptions& o = st.options;
+  if (st.problem.actuators.empty()) return;  // the actuators' problem is reported
+  long long iterations = o.max_iter;
+  std::string iterations_key = "max_iterations";
+  for (const auto& [key, value] : o.ipopt_options)
+    if (key == "max_iter") {
+      iterations = std::stoll(value);  // checked against Ipopt's registry: a whole number
+      iterations_key = "ipopt.max_iter";
+    }
+  double unknowns = 0;
+  for (int r = 0, n = o.intervals; r <= o.mesh_refinements; ++r, n = std::min(2 * n, o.max_intervals))
+    unknowns += nlp_unknowns(st, n, noa);
+  const double work = static_cast<double>(iterations) * unknowns;
+  if (work <= lim::kMaxIpoptWork) return;
+  std::string at = "intervals";
+  for (const char* k : {"max_iterations", "intervals", "mesh_refinements"})
+    if (m.has(k)) {
+      at = k;
+      break;
+    }
+  std::ostringstream os;
+  os << m.key_path(iterations_key) << " = " << iterations << " with intervals = " << o.intervals
+     << " and mesh_refinements = " << o.mesh_refinements << " allows " << shortest(work)
+     << " Ipopt iteration-unknowns (iterations x NLP unknowns, " << shortest(unknowns)
+     << " unknowns over the rounds); at most " << shortest(lim::kMaxIpoptWork)
+     << " (about 3 min of CPU): lower max_iterations, intervals or mesh_refinements";
+  m.problem(at, os.str());
 }
 
 }  // namespace
@@ -95,6 +218,25 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   };
   per_actuator("actuator_weights", kWeight, p.energy_weights);
   per_actuator("rate_limits", kCommand, p.du_max);
+  // The elastic modes inside the problem (first-order model about the rigid motion).
+  p.elastic = m.boolean("elastic", false).value_or(false);
+  p.zero_end_commands = m.boolean("zero_end_commands", false).value_or(false);
+  p.elastic_modes = static_cast<int>(
+      m.integer_or_word("elastic_modes", 1, kMaxNoa, "all", ManeuverProblem::all_modes, false).value_or(-1));
+  p.modes_at_rest = static_cast<int>(
+      m.integer_or_word("modes_at_rest", 0, kMaxNoa, "all", ManeuverProblem::all_modes, false).value_or(0));
+  p.w_vibration = m.number("vibration_weight", kWeight, false).value_or(0.0);
+  p.tip_deflection_limit_m =
+      m.number("tip_deflection_limit_m", Range::positive().supported(0.0, lim::kMaxPosition_m), false)
+          .value_or(ManeuverProblem::inf);
+  if (p.elastic && p.modes_at_rest > d.noa && d.noa > 0)
+    m.problem("modes_at_rest", m.key_path("modes_at_rest") + " = " + std::to_string(p.modes_at_rest) +
+                                   ", must be at most model.noa = " + std::to_string(d.noa) +
+                                   " (the elastic coordinates) or \"all\"");
+  if (p.elastic && p.elastic_modes > d.noa && d.noa > 0)
+    m.problem("elastic_modes", m.key_path("elastic_modes") + " = " + std::to_string(p.elastic_modes) +
+                                   ", must be at most model.noa = " + std::to_string(d.noa) +
+                                   " (the elastic coordinates) or \"all\"");
   // What the library checks itself (bounds in order, weights, time weight and a free
   // duration, sizes per actuator) is reported at the keys that set it.
   FieldKeys keys{{"t_min_s", "duration_min_s"}, {"t_max_s", "duration_max_s"}, {"free_time", "free_duration"}};
@@ -102,44 +244,22 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   if (objective == "weighted")
     keys.insert(keys.end(), {{"w_energy", "energy_weight"}, {"w_time", "time_weight"}, {"w_smooth", "smooth_weight"}});
   if (names_ok) keys.insert(keys.end(), {{"energy_weights", "actuator_weights"}, {"du_max", "rate_limits"}});
+  keys.insert(keys.end(), {{"modes_at_rest", "modes_at_rest"},
+                           {"elastic_modes", "elastic_modes"},
+                           {"w_vibration", "vibration_weight"},
+                           {"tip_deflection_limit_m", "tip_deflection_limit_m"}});
   report_field_problems(m, problems(p, static_cast<int>(d.loads.size() + d.actuators.size())), keys);
 
   o.transcription = m.enumerated<Transcription>("transcription", false).value_or(o.transcription);
   o.intervals = static_cast<int>(m.integer("intervals", 1, lim::kMaxIntervals, false).value_or(o.intervals));
-  o.mesh_refinements = static_cast<int>(m.integer("mesh_refinements", 0, 20, false).value_or(o.mesh_refinements));
+  o.mesh_refinements =
+      static_cast<int>(m.integer("mesh_refinements", 0, lim::kMaxMeshRefinements, false).value_or(o.mesh_refinements));
   o.mesh_tolerance = m.number("mesh_tolerance", Range::positive(), false).value_or(o.mesh_tolerance);
   o.tol = m.number("tolerance", Range{0.0, 1.0, true, true}, false).value_or(o.tol);
-  o.max_iter = static_cast<int>(m.integer("max_iterations", 1, 1000000, false).value_or(o.max_iter));
+  o.max_iter = static_cast<int>(m.integer("max_iterations", 1, lim::kMaxIterations, false).value_or(o.max_iter));
   st.quiet = m.boolean("quiet", false).value_or(st.quiet);
-  Section ip = m.table("ipopt");
-  if (ip.present()) {
-    for (const auto& [key, value] : ip.raw_entries()) {
-      // Debian's Ipopt is built with MUMPS only: any other solver makes Ipopt abort the
-      // whole process (it tries to load libhsl.so)
-      if (key == "linear_solver" && lower_trimmed(value) != "mumps") {
-        ip.problem(
-            key, ip.key_path(key) + " = \"" + value + "\", must be \"mumps\" (the only linear solver this Ipopt has)");
-        continue;
-      }
-      if (key == "linear_system_scaling" && lower_trimmed(value) == "mc19") {
-        ip.problem(key, ip.key_path(key) + " = \"" + value +
-                            "\", must be \"none\" or \"slack-based\" (MC19 is part of HSL, which this Ipopt lacks)");
-        continue;
-      }
-      // freeflex writes Ipopt's log there, into the run's directory with the other results
-      // (and replaced with them), so it must be a plain file name.
-      if (key == "output_file") {
-        if (!plain_name(value, ".")) {
-          ip.problem(key, ip.key_path(key) + " = \"" + value +
-                              "\", must be a file name of 1 to 64 letters, digits, '_', '-' or '.', not starting with "
-                              "'.' (Ipopt writes it into the output directory)");
-          continue;
-        }
-        outputs.named(ip, key, value, {""});
-      }
-      o.ipopt_options.emplace_back(key, value);
-    }
-  }
+  read_ipopt_options(m, st, outputs, d.noa);
+  check_ipopt_work(m, st, d.noa);
   m.finish();
   outputs.fixed("[maneuver]", "trajectory.csv");
   for (const char* f : {"maneuver_states.gp", "maneuver_states.png", "maneuver_controls.gp", "maneuver_controls.png"})

@@ -1,4 +1,4 @@
-// [motion]: the reference frame's motion prescribed (docs/theory.md section 13, eq. 13.10).
+// [motion]: the reference frame's motion prescribed (docs/theory.md section 14, eq. 14.10).
 #include <cmath>
 #include <stdexcept>
 

@@ -1,6 +1,7 @@
 // The validating reader over a design file's TOML tables (io/design_reader.hpp).
 #include "io/design_reader.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -60,6 +61,15 @@ void Problems::add(int line, const std::string& message) {
   while (at != list_.begin() && lines_[at - list_.begin() - 1] > line) --at;
   lines_.insert(lines_.begin() + (at - list_.begin()), line);
   list_.insert(at, os.str());
+}
+
+bool Problems::troubled(const std::string& key_path) const {
+  for (std::string p = key_path; !p.empty();) {
+    if (troubled_.count(p)) return true;
+    const auto cut = p.find_last_of(".[");
+    p = cut == std::string::npos ? "" : p.substr(0, cut);
+  }
+  return false;
 }
 
 bool Range::contains(double v) const {
@@ -122,6 +132,7 @@ int Section::line(const std::string& key) const {
 
 void Section::report(const std::string& key, int line, const std::string& message) {
   troubled_.insert(key);
+  problems_.mark(key_path(key));
   problems_.add(line, message);
 }
 
@@ -132,6 +143,7 @@ const toml::node* Section::get(const std::string& key) {
 
 void Section::problem(const std::string& key, const std::string& message) {
   troubled_.insert(key);
+  problems_.mark(key_path(key));
   const toml::node* n = table_ ? table_->get(key) : nullptr;
   problems_.add(n ? line_of(*n) : line_, message);
 }
@@ -175,6 +187,19 @@ std::optional<long long> Section::integer(const std::string& key, long long lo, 
     return std::nullopt;
   }
   return v;
+}
+
+std::optional<long long> Section::integer_or_word(const std::string& key, long long lo, long long hi,
+                                                  const std::string& word, long long word_value, bool required) {
+  const toml::node* n = get(key);
+  if (n && n->is_string()) {
+    if (*n->value<std::string>() == word) return word_value;
+    report(key, line_of(*n),
+           key_path(key) + " = " + show(*n) + ", must be a whole number in [" + std::to_string(lo) + ", " +
+               std::to_string(hi) + "] or \"" + word + "\"");
+    return std::nullopt;
+  }
+  return integer(key, lo, hi, required);
 }
 
 std::optional<bool> Section::boolean(const std::string& key, bool required) {
@@ -292,6 +317,24 @@ std::optional<std::vector<double>> Section::number_array(const std::string& key,
   return out;
 }
 
+std::optional<std::pair<double, std::optional<double>>> Section::number_or_pair(const std::string& key,
+                                                                                const Range& range, bool required) {
+  const toml::node* n = table_ ? table_->get(key) : nullptr;
+  if (!n || !n->is_array()) {
+    const auto v = number(key, range, required);
+    if (!v) return std::nullopt;
+    return std::make_pair(*v, std::optional<double>());
+  }
+  const auto v = number_array(key, range, required);
+  if (!v) return std::nullopt;
+  if (v->size() != 2) {
+    report(key, line_of(*n), key_path(key) + " has " + std::to_string(v->size()) +
+                                 " entries, must be a number or [start, end] (two numbers, varying linearly)");
+    return std::nullopt;
+  }
+  return std::make_pair((*v)[0], std::optional<double>((*v)[1]));
+}
+
 std::optional<std::vector<std::string>> Section::string_array(const std::string& key, bool required) {
   const toml::node* n = get(key);
   if (!n) {
@@ -314,28 +357,32 @@ std::optional<std::vector<std::string>> Section::string_array(const std::string&
   return out;
 }
 
-std::vector<std::pair<std::string, std::string>> Section::raw_entries() {
-  std::vector<std::pair<std::string, std::string>> out;
+std::vector<Section::RawEntry> Section::raw_entries() {
+  std::vector<RawEntry> out;
   if (!table_) return out;
   for (const auto& [k, v] : *table_) {
     const std::string key(k.str());
     asked_.insert(key);
+    const int line = line_of(v);
     if (v.is_string()) {
-      out.emplace_back(key, *v.value<std::string>());
+      out.push_back({key, *v.value<std::string>(), RawEntry::Kind::String, line});
     } else if (v.is_integer()) {
-      out.emplace_back(key, std::to_string(*v.value<long long>()));
+      out.push_back({key, std::to_string(*v.value<long long>()), RawEntry::Kind::Integer, line});
     } else if (v.is_floating_point() && !std::isfinite(*v.value<double>())) {
-      problems_.add(line_of(v), key_path(key) + " = " + show(v) + ", must be a finite number");
+      problems_.mark(key_path(key));
+      problems_.add(line, key_path(key) + " = " + show(v) + ", must be a finite number");
     } else if (v.is_floating_point()) {
       char buf[32];
       std::snprintf(buf, sizeof buf, "%.17g", *v.value<double>());
-      out.emplace_back(key, buf);
+      out.push_back({key, buf, RawEntry::Kind::Float, line});
     } else if (v.is_boolean()) {
-      out.emplace_back(key, *v.value<bool>() ? "yes" : "no");
+      out.push_back({key, *v.value<bool>() ? "yes" : "no", RawEntry::Kind::Boolean, line});
     } else {
-      problems_.add(line_of(v), key_path(key) + " must be a string, number or boolean (it is passed to the solver)");
+      problems_.mark(key_path(key));
+      problems_.add(line, key_path(key) + " must be a string, number or boolean (it is passed to the solver)");
     }
   }
+  std::stable_sort(out.begin(), out.end(), [](const RawEntry& a, const RawEntry& b) { return a.line < b.line; });
   return out;
 }
 
@@ -343,6 +390,7 @@ Section Section::table(const std::string& key) {
   const toml::node* n = get(key);
   if (!n) return Section(nullptr, key_path(key), problems_, line_);
   if (!n->is_table()) {
+    problems_.mark(key_path(key));
     problems_.add(line_of(*n), key_path(key) + " must be a table ([" + key_path(key) + "])");
     return Section(nullptr, key_path(key), problems_, line_of(*n));
   }
@@ -355,6 +403,7 @@ std::vector<Section> Section::table_array(const std::string& key) {
   if (!n) return out;
   const toml::array* arr = n->as_array();
   if (!arr || !arr->is_array_of_tables()) {
+    problems_.mark(key_path(key));
     problems_.add(line_of(*n), key_path(key) + " must be an array of tables ([[" + key_path(key) + "]])");
     return out;
   }

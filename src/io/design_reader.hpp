@@ -30,9 +30,14 @@ class Problems {
   bool empty() const { return list_.empty(); }
   const std::vector<std::string>& list() const { return list_; }
   const std::string& source() const { return source_; }
+  /// Marks a key (dotted path) whose value was rejected: what depends on it is not checked.
+  void mark(const std::string& key_path) { troubled_.insert(key_path); }
+  /// True if `key_path` or a table that holds it was marked.
+  bool troubled(const std::string& key_path) const;
 
  private:
   std::string source_;
+  std::set<std::string> troubled_;
   std::vector<std::string> list_;
   std::vector<int> lines_;  // line of each problem, for file order
 };
@@ -75,6 +80,9 @@ class Section {
 
   std::optional<double> number(const std::string& key, const Range& range, bool required);
   std::optional<long long> integer(const std::string& key, long long lo, long long hi, bool required);
+  /// A whole number in [lo, hi], or the string `word` read as `word_value` ("all").
+  std::optional<long long> integer_or_word(const std::string& key, long long lo, long long hi, const std::string& word,
+                                           long long word_value, bool required);
   std::optional<bool> boolean(const std::string& key, bool required);
   /// A string; if `identifier`, only letters, digits, '_' and '-' (it names files).
   std::optional<std::string> string(const std::string& key, bool required, bool identifier = false);
@@ -90,12 +98,24 @@ class Section {
   std::optional<std::vector<long long>> integer_array(const std::string& key, long long lo, long long hi,
                                                       bool required);
   std::optional<std::vector<std::string>> string_array(const std::string& key, bool required);
-  /// Every entry of this table as (key, value text), for options passed through to a
-  /// library (strings as written, numbers in full precision, booleans as yes/no).
-  /// Nested tables and arrays are problems.
-  std::vector<std::pair<std::string, std::string>> raw_entries();
+  /// An entry of a table passed through to a library: its key, its value as text (strings
+  /// as written, numbers in full precision, booleans as yes/no), how it was written, and
+  /// its line.
+  struct RawEntry {
+    enum class Kind { String, Integer, Float, Boolean };
+    std::string key, text;
+    Kind kind;
+    int line;
+  };
+  /// Every entry of this table, in file order. Nested tables, arrays and non-finite numbers
+  /// are problems.
+  std::vector<RawEntry> raw_entries();
   std::optional<std::vector<double>> number_array(const std::string& key, const Range& range,
                                                   bool required);
+  /// A number, or [start, end]: two numbers (a property varying linearly along a piece).
+  /// Returns {start, end}; end is empty for a single number.
+  std::optional<std::pair<double, std::optional<double>>> number_or_pair(const std::string& key, const Range& range,
+                                                                         bool required);
   /// A sub-table ([beam.hub]); absent gives a Section with present() false.
   Section table(const std::string& key);
   /// An array of tables ([[beam.segment]]).

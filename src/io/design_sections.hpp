@@ -86,6 +86,8 @@ bool check_count(Section& s, const std::string& key, const std::string& lead, co
 
 /// `s` without surrounding blanks, in lower case (how Ipopt compares string option values).
 std::string lower_trimmed(const std::string& s);
+/// `s` without surrounding blanks (how Ipopt reads a value).
+std::string trimmed(const std::string& s);
 
 /// Total length of the design's beam (0 while it has no valid segment).
 double beam_length(const Design& d);
@@ -107,6 +109,9 @@ using FieldKeys = std::vector<std::pair<std::string, std::string>>;
 void report_field_problems(Section& s, const std::vector<FieldProblem>& problems, const FieldKeys& keys);
 
 // One reader per section; each fills its part of the design and reports its problems.
+void read_model(Section& root, Design& d);
+/// Largest number of shape functions the design's basis offers (kMaxNoa for the paper's).
+int max_modes(const Design& d);
 void read_beam(Section& root, Design& d);
 void read_free_vibration(Section& root, Design& d, Outputs& outputs);
 /// Returns the names of the actuators rejected for a bad field (already reported), so that
@@ -118,6 +123,8 @@ void read_motion(Section& root, Design& d);
 void read_simulation(Section& root, Design& d, Outputs& outputs);
 void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
 void read_controller(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
+/// [[sensor]], [lqg] and [sweep] (io/design_sweep.cpp), after [controller].
+void read_sensors_lqg_sweep(Section& root, Design& d, Outputs& outputs);
 void read_bang_bang(Section& root, Design& d, Outputs& outputs, const Problems& problems,
                     const std::vector<std::string>& rejected);
 

@@ -11,13 +11,15 @@
 #include <stdexcept>
 #include <unistd.h>
 
+#include "io/system_error.hpp"
+
 namespace freeflex {
 
 void write_file_atomic(const std::string& path, const std::function<void(std::ostream&)>& writer) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError("cannot write '" + path + "': " + std::strerror(errno));
+    if (!out) throw IoError("cannot write '" + path + "': " + io_detail::reason(errno));
     try {
       writer(out);
     } catch (...) {
@@ -27,14 +29,14 @@ void write_file_atomic(const std::string& path, const std::function<void(std::os
     }
     out.flush();
     if (!out) {
-      const std::string why = std::strerror(errno);
+      const std::string why = io_detail::reason(errno);
       out.close();
       std::remove(tmp.c_str());
       throw IoError("cannot write '" + path + "': " + why);
     }
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
+    const std::string why = io_detail::reason(errno);
     std::remove(tmp.c_str());
     throw IoError("cannot write '" + path + "': " + why);
   }

@@ -1,32 +1,82 @@
-// Figures through gnuplot: the script beside the data, the PNG rendered to a temporary name.
+// Figures through gnuplot: the script beside the data, its text made safe for gnuplot,
+// the PNG rendered to a temporary name by gnuplot run under a time limit.
 #include "freeflex/io/plot.hpp"
 
+#include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <sstream>
-#include <sys/wait.h>
+#include <stdexcept>
 #include <unistd.h>
 
 #include "freeflex/io/output.hpp"
+#include "io/run_program.hpp"
 
 namespace freeflex {
 namespace {
 
+/// Length of the valid UTF-8 sequence starting at s[i], 0 if none starts there.
+std::size_t utf8_length(const std::string& s, std::size_t i) {
+  const auto c = static_cast<unsigned char>(s[i]);
+  std::size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+  if (n == 0 || i + n > s.size()) return 0;
+  for (std::size_t k = 1; k < n; ++k)
+    if ((static_cast<unsigned char>(s[i + k]) & 0xC0) != 0x80) return 0;
+  return n;
+}
+
+/// `s` as a figure may show it: control characters as blanks, invalid UTF-8 as '?', at
+/// most kMaxFigureTextBytes bytes (cut at a character, "..." at the end).
+std::string figure_text(const std::string& s) {
+  std::string t;
+  for (std::size_t i = 0; i < s.size();) {
+    const std::size_t n = utf8_length(s, i);
+    std::string ch;
+    if (n == 0) {
+      ch = "?";
+      ++i;
+    } else {
+      const auto c = static_cast<unsigned char>(s[i]);
+      ch = (n == 1 && (c < 0x20 || c == 0x7F)) ? std::string(" ") : s.substr(i, n);
+      i += n;
+    }
+    if (t.size() + ch.size() > kMaxFigureTextBytes - 3) {
+      t += "...";
+      break;
+    }
+    t += ch;
+  }
+  return t;
+}
+
+/// A gnuplot single-quoted string ('' stands for ').
 std::string quoted(const std::string& s) {
   std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("''") : std::string(1, c);
+  for (char c : figure_text(s)) q += (c == '\'') ? std::string("''") : std::string(1, c);
   return q + "'";
 }
 
-std::string shell_quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
+std::string seconds_text(double s) {
+  std::ostringstream os;
+  os << s;
+  return os.str();
 }
 
 }  // namespace
 
-std::string render_plot(const PlotSpec& spec, const std::string& dir) {
+std::string built_in_gnuplot() {
+  const std::string g = FREEFLEX_GNUPLOT;
+  return g.find("NOTFOUND") == std::string::npos ? g : "";
+}
+
+void validate(const PlotOptions& o) {
+  if (!(o.timeout_s > 0.0 && o.timeout_s <= 3600.0))
+    throw std::invalid_argument("plot options: timeout_s = " + seconds_text(o.timeout_s) + ", expected in (0, 3600]");
+  if (o.gnuplot.find('\0') != std::string::npos)
+    throw std::invalid_argument("plot options: gnuplot contains a NUL character");
+}
+
+PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotOptions& options) {
+  validate(options);
   const int panels = static_cast<int>(spec.panels.size());
   const int height = spec.height_px > 0 ? spec.height_px : 60 + 300 * panels;
   std::ostringstream gp;
@@ -55,27 +105,49 @@ std::string render_plot(const PlotSpec& spec, const std::string& dir) {
   if (panels > 1) gp << "unset multiplot\n";
   write_file_atomic(dir + "/" + spec.name + ".gp", gp.str());
 
-  const std::string gnuplot = FREEFLEX_GNUPLOT;
-  if (gnuplot.empty() || gnuplot.find("NOTFOUND") != std::string::npos)
-    return "gnuplot was not found when freeflex was built; run 'gnuplot " + spec.name + ".gp' in " + dir;
-  const std::string tmp = spec.name + ".png.tmp." + std::to_string(::getpid());
-  const std::string cmd = "cd " + shell_quoted(dir) + " && " + shell_quoted(gnuplot) + " -e " +
-                          shell_quoted("outfile='" + tmp + "'") + " " + shell_quoted(spec.name + ".gp") +
-                          " 2>&1";
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (!pipe) return "could not start gnuplot";
-  std::string output;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, pipe)) output += buf;
-  const int status = ::pclose(pipe);
-  const std::string tmp_path = dir + "/" + tmp;
-  if (status != 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    std::remove(tmp_path.c_str());
-    return "gnuplot failed on " + spec.name + ".gp: " + output;
+  PlotResult r;
+  const std::string rerun = "; run 'gnuplot " + spec.name + ".gp' in " + dir;
+  if (options.gnuplot.empty()) {
+    r.status = PlotResult::Status::NoGnuplot;
+    r.message = "no gnuplot (none was found when freeflex was built, or FREEFLEX_GNUPLOT is empty)" + rerun;
+    return r;
   }
-  if (std::rename(tmp_path.c_str(), (dir + "/" + spec.name + ".png").c_str()) != 0)
-    return "could not rename the rendered " + spec.name + ".png";
-  return "";
+  const std::string tmp = spec.name + ".png.tmp." + std::to_string(::getpid());
+  const std::string tmp_path = dir + "/" + tmp;
+  const io_detail::ProgramRun run =
+      io_detail::run_program({options.gnuplot, "-e", "outfile='" + tmp + "'", spec.name + ".gp"}, dir, options.timeout_s);
+  r.seconds = run.seconds;
+  if (!run.ok()) std::remove(tmp_path.c_str());
+  using S = io_detail::ProgramRun::Status;
+  switch (run.status) {
+    case S::NotStarted:
+      r.status = PlotResult::Status::Failed;
+      r.message = run.error + rerun;
+      return r;
+    case S::TimedOut:
+      r.status = PlotResult::Status::TimedOut;
+      r.message = "gnuplot did not finish " + spec.name + ".gp within " + seconds_text(options.timeout_s) +
+                  " s and was stopped" + rerun;
+      return r;
+    case S::Signaled:
+      r.status = PlotResult::Status::Failed;
+      r.message = "gnuplot was killed by signal " + std::to_string(run.signal) + " on " + spec.name + ".gp" + rerun;
+      return r;
+    case S::Exited:
+      if (run.exit_code != 0) {
+        r.status = PlotResult::Status::Failed;
+        r.message = "gnuplot failed on " + spec.name + ".gp (exit " + std::to_string(run.exit_code) + "): " + run.output;
+        return r;
+      }
+  }
+  if (std::rename(tmp_path.c_str(), (dir + "/" + spec.name + ".png").c_str()) != 0) {
+    std::remove(tmp_path.c_str());
+    r.status = PlotResult::Status::Failed;
+    r.message = "could not rename the rendered " + spec.name + ".png";
+    return r;
+  }
+  r.status = PlotResult::Status::Drawn;
+  return r;
 }
 
 }  // namespace freeflex

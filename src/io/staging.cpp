@@ -16,13 +16,35 @@
 #include <unistd.h>
 
 #include "freeflex/io/output.hpp"
+#include "io/system_error.hpp"
 
 namespace freeflex::staging {
 namespace {
 
+using io_detail::reason;
+
 const char* const kManifest = ".freeflex-files";
 const char* const kStagingPrefix = ".freeflex-staging-";
 const char* const kLock = ".freeflex-lock";
+
+/// Why `dir`, which exists but is no directory we can use, is refused (stat failed with
+/// `err`, or found something else).
+std::string not_a_directory(const std::string& dir, int err) {
+  const std::string where = "output path '" + dir + "'";
+  struct stat lst {};
+  if (::lstat(dir.c_str(), &lst) == 0 && S_ISLNK(lst.st_mode)) {
+    std::string target(4096, '\0');
+    const ssize_t n = ::readlink(dir.c_str(), target.data(), target.size());
+    target.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+    const std::string link = where + " is a symbolic link to '" + target + "'";
+    if (err == ELOOP) return where + " is a symbolic link that leads back to itself (a loop of links); give a directory";
+    if (err == ENOENT) return link + ", which does not exist (a dangling link); create it or give a directory";
+    if (err == 0) return link + ", which is not a directory";
+    return link + " that cannot be followed: " + reason(err);
+  }
+  if (err != 0) return "cannot use " + where + ": " + reason(err);
+  return where + " exists and is not a directory";
+}
 
 /// Creates DIR (and missing parents). Throws IoError with the reason.
 void make_dirs(const std::string& dir) {
@@ -33,11 +55,12 @@ void make_dirs(const std::string& dir) {
     partial = dir.substr(0, pos);
     if (partial.empty()) continue;
     if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST)
-      throw IoError("cannot create output directory '" + partial + "': " + std::strerror(errno));
+      throw IoError("cannot create output directory '" + partial + "': " + reason(errno));
   }
   struct stat st {};
-  if (::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
-    throw IoError("output path '" + dir + "' exists and is not a directory");
+  const int found = ::stat(dir.c_str(), &st);
+  if (found == 0 && S_ISDIR(st.st_mode)) return;
+  throw IoError(not_a_directory(dir, found == 0 ? 0 : errno));
 }
 
 /// Names of the regular files in `dir` (not recursive, symbolic links not followed);
@@ -87,21 +110,21 @@ void write_manifest(const std::string& staging, const std::string& dir, const st
   const std::string next = staging + "/" + kManifest;
   write_file_atomic(next, text);
   if (std::rename(next.c_str(), (dir + "/" + kManifest).c_str()) != 0)
-    throw IoError("cannot write '" + dir + "/" + kManifest + "': " + std::strerror(errno));
+    throw IoError("cannot write '" + dir + "/" + kManifest + "': " + reason(errno));
 }
 
 /// An exclusive lock on DIR; a second run into DIR fails at once. Returns the descriptor.
 int lock(const std::string& dir) {
   const std::string path = dir + "/" + kLock;
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
-  if (fd < 0) throw IoError("cannot open '" + path + "': " + std::strerror(errno));
+  if (fd < 0) throw IoError("cannot open '" + path + "': " + reason(errno));
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     ::close(fd);
     if (err == EWOULDBLOCK)
       throw IoError("another freeflex run is writing into '" + dir +
                     "'; wait for it to finish or give this run another --out");
-    throw IoError("cannot lock '" + path + "': " + std::strerror(err));
+    throw IoError("cannot lock '" + path + "': " + reason(err));
   }
   return fd;
 }
@@ -128,7 +151,8 @@ StagedDirectory::StagedDirectory(std::string dir) : dir_(std::move(dir)) {
   try {
     remove_stale_staging(dir_);
     staging_ = dir_ + "/" + kStagingPrefix + std::to_string(::getpid());
-    if (::mkdir(staging_.c_str(), 0755) != 0) throw IoError("cannot create '" + staging_ + "': " + std::strerror(errno));
+    if (::mkdir(staging_.c_str(), 0755) != 0)
+      throw IoError("cannot create the staging directory of this run in '" + dir_ + "': " + reason(errno));
   } catch (...) {
     ::close(lock_fd_);
     throw;
@@ -155,7 +179,7 @@ std::size_t StagedDirectory::commit() {
     if (!keep.count(f)) std::remove((dir_ + "/" + f).c_str());
   auto move = [&](const std::string& name) {
     if (std::rename((staging_ + "/" + name).c_str(), (dir_ + "/" + name).c_str()) != 0)
-      throw IoError("cannot move '" + name + "' into '" + dir_ + "': " + std::strerror(errno) +
+      throw IoError("cannot move '" + name + "' into '" + dir_ + "': " + reason(errno) +
                     " (DIR now holds part of this run's files and no summary.json)");
   };
   for (const auto& f : fresh)

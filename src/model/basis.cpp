@@ -2,7 +2,9 @@
 // cancellation, and the basis on both halves of the beam.
 #include "freeflex/model/basis.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -55,13 +57,46 @@ AdmissibleBasis::AdmissibleBasis(int n, double a_left, double a_right)
   if (!(a_left >= 0.0) || !(a_right >= 0.0) || !std::isfinite(a_left) || !std::isfinite(a_right) ||
       !(a_left + a_right > 0.0))
     throw std::invalid_argument("admissible basis: half-lengths must be finite and >= 0, and not both zero");
-  const int cantilevers = one_sided() ? n : (n + 1) / 2;
-  for (int k = 1; k <= cantilevers; ++k) modes_.emplace_back(k);
+  symmetric_ = std::abs(a_left - a_right) <= 1e-12 * (a_left + a_right);
+  if (symmetric_) {
+    for (int k = 1; k <= (n + 1) / 2; ++k) modes_.emplace_back(k);
+    for (int j = 0; j < n; ++j) functions_.push_back({j % 2 == 0 ? Shape::Symmetric : Shape::Antisymmetric, j / 2});
+    return;
+  }
+  // eq. 2.4: merge the two sides' sequences by wavenumber lambda_k / a (ties: the longer side first).
+  // o at an end (one side of zero length, a cantilever clamped at o): that side's wavenumber
+  // is infinite, so every function is the other side's, its cantilever modes in order.
+  const bool left_longer = a_left > a_right;
+  int kl = 0, kr = 0;
+  while (static_cast<int>(functions_.size()) < n) {
+    const int k = std::max(kl, kr);
+    while (static_cast<int>(modes_.size()) <= k) modes_.emplace_back(static_cast<int>(modes_.size()) + 1);
+    const double inf = std::numeric_limits<double>::infinity();
+    const double wl = a_left > 0.0 ? modes_[kl].lambda / a_left : inf;
+    const double wr = a_right > 0.0 ? modes_[kr].lambda / a_right : inf;
+    if (wl < wr || (wl == wr && left_longer)) functions_.push_back({Shape::Left, kl++});
+    else functions_.push_back({Shape::Right, kr++});
+  }
 }
 
 double AdmissibleBasis::max_wavenumber() const {
-  if (one_sided()) return modes_.back().lambda / std::max(a_left_, a_right_);
-  return modes_.back().lambda / std::min(a_left_, a_right_);
+  if (symmetric_) return modes_.back().lambda / std::min(a_left_, a_right_);
+  double w = 0.0;
+  for (const Function& f : functions_)
+    w = std::max(w, modes_[f.k].lambda / (f.shape == Shape::Left ? a_left_ : a_right_));
+  return w;
+}
+
+int AdmissibleBasis::functions_left() const {
+  int c = 0;
+  for (const Function& f : functions_) c += f.shape != Shape::Right;
+  return c;
+}
+
+int AdmissibleBasis::functions_right() const {
+  int c = 0;
+  for (const Function& f : functions_) c += f.shape != Shape::Left;
+  return c;
 }
 
 BasisValues AdmissibleBasis::evaluate(double x) const {
@@ -70,31 +105,17 @@ BasisValues AdmissibleBasis::evaluate(double x) const {
   const double a = right ? a_right_ : a_left_;
   const double sgn = right ? 1.0 : -1.0;
   const double xi = std::abs(x);
-  if (one_sided()) {
-    // o at an end: function j is the (j+1)-th cantilever mode of the one half there is;
-    // the other side has no beam (zero there, as at o).
-    if (a == 0.0) {
-      v.phi.setZero();
-      v.dphi.setZero();
-      v.ddphi.setZero();
-      return v;
-    }
-    for (int j = 0; j < n_; ++j) {
-      const CantileverConstants& mode = modes_[j];
-      const double beta = mode.lambda / a;
-      const CantileverMode p = mode.at(beta * xi);
-      v.phi(j) = p.value;
-      v.dphi(j) = sgn * beta * p.d1;
-      v.ddphi(j) = beta * beta * p.d2;
-    }
-    return v;
-  }
   for (int j = 0; j < n_; ++j) {
-    const CantileverConstants& mode = modes_[j / 2];
+    const Function& f = functions_[j];
+    if ((f.shape == Shape::Left && right) || (f.shape == Shape::Right && !right)) {
+      v.phi(j) = v.dphi(j) = v.ddphi(j) = 0.0;  // a one-sided function on its other side
+      continue;
+    }
+    const CantileverConstants& mode = modes_[f.k];
     const double beta = mode.lambda / a;
     const CantileverMode p = mode.at(beta * xi);
     // d/dx psi(beta |x|) = sign(x) beta psi'; the antisymmetric ones carry one more sign(x).
-    if (j % 2 == 0) {
+    if (f.shape != Shape::Antisymmetric) {
       v.phi(j) = p.value;
       v.dphi(j) = sgn * beta * p.d1;
       v.ddphi(j) = beta * beta * p.d2;

@@ -1,6 +1,7 @@
 // The beam: validation of its properties, the reference point, mass and stiffness along it.
 #include "freeflex/model/beam.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -39,6 +40,9 @@ Beam::Beam(BeamProperties props) : props_(std::move(props)) {
     require_positive(seg.length_m, tag + " length_m");
     require_positive(seg.mass_per_length_kg_m, tag + " mass_per_length_kg_m");
     require_positive(seg.bending_stiffness_Nm2, tag + " bending_stiffness_Nm2");
+    // linear between two positive ends: positive all along
+    if (seg.mass_per_length_end_kg_m) require_positive(*seg.mass_per_length_end_kg_m, tag + " mass_per_length_end_kg_m");
+    if (seg.bending_stiffness_end_Nm2) require_positive(*seg.bending_stiffness_end_Nm2, tag + " bending_stiffness_end_Nm2");
     length_ += seg.length_m;
   }
   require_nonnegative(props_.hub_mass_kg, "beam hub mass_kg");
@@ -59,9 +63,17 @@ Beam::Beam(BeamProperties props) : props_(std::move(props)) {
     // Mass centre of distributed mass and point masses (the hub sits at o and cannot move it).
     double m = 0.0, ms = 0.0, s0 = 0.0;
     for (const auto& seg : props_.segments) {
-      const double mi = seg.mass_per_length_kg_m * seg.length_m;
-      m += mi;
-      ms += mi * (s0 + 0.5 * seg.length_m);
+      if (seg.mass_per_length_end_kg_m) {
+        // linear mass: centroid at L (mu_a + 2 mu_b) / (3 (mu_a + mu_b)) from the segment's start
+        const double ma = seg.mass_per_length_kg_m, mb = *seg.mass_per_length_end_kg_m;
+        const double mi = seg.mass();
+        m += mi;
+        ms += mi * s0 + seg.length_m * seg.length_m * (ma + 2.0 * mb) / 6.0;
+      } else {
+        const double mi = seg.mass_per_length_kg_m * seg.length_m;
+        m += mi;
+        ms += mi * (s0 + 0.5 * seg.length_m);
+      }
       s0 += seg.length_m;
     }
     for (const auto& pm : props_.point_masses) {
@@ -78,18 +90,39 @@ Beam::Beam(BeamProperties props) : props_(std::move(props)) {
   }
 }
 
-const BeamSegment& Beam::segment_at(double x) const {
+const BeamSegment& Beam::segment_at(double x, double* t) const {
   const double s = x + s_o_;
   double s_end = 0.0;
   for (const auto& seg : props_.segments) {
+    const double s_start = s_end;
     s_end += seg.length_m;
-    if (s < s_end) return seg;
+    if (s < s_end || &seg == &props_.segments.back()) {
+      if (t) *t = std::min(1.0, std::max(0.0, (s - s_start) / seg.length_m));  // round-off at the ends
+      return seg;
+    }
   }
-  return props_.segments.back();
+  return props_.segments.back();  // not reached: the loop returns at the last segment
 }
 
-double Beam::mass_per_length(double x) const { return segment_at(x).mass_per_length_kg_m; }
-double Beam::bending_stiffness(double x) const { return segment_at(x).bending_stiffness_Nm2; }
+double Beam::mass_per_length(double x) const {
+  double t = 0.0;
+  const BeamSegment& seg = segment_at(x, &t);
+  if (!seg.mass_per_length_end_kg_m) return seg.mass_per_length_kg_m;
+  return seg.mass_per_length_kg_m + t * (*seg.mass_per_length_end_kg_m - seg.mass_per_length_kg_m);
+}
+
+double Beam::bending_stiffness(double x) const {
+  double t = 0.0;
+  const BeamSegment& seg = segment_at(x, &t);
+  if (!seg.bending_stiffness_end_Nm2) return seg.bending_stiffness_Nm2;
+  return seg.bending_stiffness_Nm2 + t * (*seg.bending_stiffness_end_Nm2 - seg.bending_stiffness_Nm2);
+}
+
+bool Beam::tapered() const {
+  for (const auto& seg : props_.segments)
+    if (seg.tapered()) return true;
+  return false;
+}
 
 std::vector<double> Beam::breakpoints_x() const {
   std::vector<double> b{-s_o_};
@@ -104,13 +137,17 @@ std::vector<double> Beam::breakpoints_x() const {
 
 double Beam::distributed_mass() const {
   double m = 0.0;
-  for (const auto& seg : props_.segments) m += seg.mass_per_length_kg_m * seg.length_m;
+  for (const auto& seg : props_.segments)
+    m += seg.mass_per_length_end_kg_m ? seg.mass() : seg.mass_per_length_kg_m * seg.length_m;
   return m;
 }
 
 double Beam::mean_bending_stiffness() const {
   double a = 0.0;
-  for (const auto& seg : props_.segments) a += seg.bending_stiffness_Nm2 * seg.length_m;
+  for (const auto& seg : props_.segments)
+    a += (seg.bending_stiffness_end_Nm2 ? 0.5 * (seg.bending_stiffness_Nm2 + *seg.bending_stiffness_end_Nm2)
+                                        : seg.bending_stiffness_Nm2) *
+         seg.length_m;
   return a / length_;
 }
 

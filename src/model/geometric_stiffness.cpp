@@ -1,48 +1,18 @@
-// Geometric stiffening integrals (docs/theory.md section 13): the foreshortening matrix
+// Geometric stiffening integrals (docs/theory.md section 14): the foreshortening matrix
 // H(x) of the bent beam and its mass integrals H_bar and G_c, by composite Gauss
-// quadrature through the basis's evaluate() alone (so any basis serves).
+// quadrature through the ShapeBasis interface alone (evaluate(), cuts(), max_panel_width()),
+// so the paper's basis and the finite-element basis serve alike.
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "freeflex/model/modal_integrals.hpp"
+#include "model/beam_rule.hpp"
 
 namespace freeflex {
 namespace {
 
-constexpr int kPoints = 20;  // as beam_quadrature: with panels no wider than 2.5 / kmax
-
-/// Composite Gauss rule on [a, b] cut at every point of `cuts` inside it, panels no wider
-/// than 2.5 / kmax (the density beam_quadrature uses, which resolves products of basis
-/// functions to round-off).
-GaussRule rule_between(double a, double b, std::vector<double> cuts, double kmax) {
-  cuts.push_back(a);
-  cuts.push_back(b);
-  std::sort(cuts.begin(), cuts.end());
-  cuts.erase(std::unique(cuts.begin(), cuts.end()), cuts.end());
-  std::vector<double> nodes, weights;
-  for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
-    const double lo = cuts[i], hi = cuts[i + 1];
-    if (lo < a || hi > b || !(hi > lo)) continue;
-    const int panels = std::max(1, static_cast<int>(std::ceil((hi - lo) * kmax / 2.5)));
-    const GaussRule g = composite_gauss(lo, hi, panels, kPoints);
-    nodes.insert(nodes.end(), g.nodes.data(), g.nodes.data() + g.nodes.size());
-    weights.insert(weights.end(), g.weights.data(), g.weights.data() + g.weights.size());
-  }
-  GaussRule r;
-  r.nodes = Eigen::Map<const Eigen::VectorXd>(nodes.data(), static_cast<Eigen::Index>(nodes.size()));
-  r.weights = Eigen::Map<const Eigen::VectorXd>(weights.data(), static_cast<Eigen::Index>(weights.size()));
-  return r;
-}
-
-/// Where the integrands may kink: o, the ends and the segment junctions.
-std::vector<double> cuts_of(const Beam& beam) {
-  std::vector<double> c = beam.breakpoints_x();
-  c.push_back(0.0);
-  return c;
-}
-
-/// Distributed mass beyond ξ (away from o) and its first absolute moment (eq. 13.3):
+/// Distributed mass beyond ξ (away from o) and its first absolute moment (eq. 14.3):
 /// μ(ξ) = ∫ dm and σ(ξ) = ∫ |x| dm over the distributed mass at |x| > |ξ| on ξ's side.
 void beyond(const Beam& beam, double xi, double& mu, double& sigma) {
   mu = sigma = 0.0;
@@ -50,6 +20,18 @@ void beyond(const Beam& beam, double xi, double& mu, double& sigma) {
   const auto& segs = beam.properties().segments;
   for (std::size_t i = 0; i < segs.size(); ++i) {
     const double a = ends[i], b = ends[i + 1], rho = segs[i].mass_per_length_kg_m;
+    if (const auto& rho_b = segs[i].mass_per_length_end_kg_m) {
+      // mass varying linearly from rho at a to rho_b at b (eq. 3.4): on [lo, hi] inside
+      // the segment, ∫ dm = h (r_lo + r_hi) / 2 and ∫ x dm = h (r_lo (2 lo + hi) + r_hi (lo + 2 hi)) / 6
+      const double lo = xi >= 0.0 ? std::max(a, xi) : a, hi = xi >= 0.0 ? b : std::min(b, xi);
+      if (!(hi > lo)) continue;
+      const double h = hi - lo, slope = (*rho_b - rho) / (b - a);
+      const double r_lo = rho + slope * (lo - a), r_hi = rho + slope * (hi - a);
+      const double first = h * (r_lo * (2.0 * lo + hi) + r_hi * (lo + 2.0 * hi)) / 6.0;
+      mu += 0.5 * h * (r_lo + r_hi);
+      sigma += xi >= 0.0 ? first : -first;
+      continue;
+    }
     if (xi >= 0.0) {
       const double lo = std::max(a, xi);
       if (b > lo) {
@@ -68,11 +50,11 @@ void beyond(const Beam& beam, double xi, double& mu, double& sigma) {
 
 }  // namespace
 
-Eigen::MatrixXd foreshortening_matrix(const Beam& beam, const AdmissibleBasis& basis, double x) {
+Eigen::MatrixXd foreshortening_matrix(const Beam& beam, const ShapeBasis& basis, double x) {
   const int n = basis.size();
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
   if (x == 0.0) return H;
-  const GaussRule g = rule_between(std::min(0.0, x), std::max(0.0, x), cuts_of(beam), basis.max_wavenumber());
+  const GaussRule g = detail::beam_rule(beam, basis, std::min(0.0, x), std::max(0.0, x), 0.0);
   for (int i = 0; i < g.nodes.size(); ++i) {
     const Eigen::RowVectorXd d = basis.evaluate(g.nodes(i)).dphi;
     H.noalias() += g.weights(i) * d.transpose() * d;
@@ -80,11 +62,12 @@ Eigen::MatrixXd foreshortening_matrix(const Beam& beam, const AdmissibleBasis& b
   return 0.5 * (H + H.transpose());
 }
 
-StiffeningIntegrals stiffening_integrals(const Beam& beam, const AdmissibleBasis& basis) {
+StiffeningIntegrals stiffening_integrals(const Beam& beam, const ShapeBasis& basis) {
   const int n = basis.size();
   StiffeningIntegrals s{Eigen::MatrixXd::Zero(n, n), Eigen::MatrixXd::Zero(n, n)};
-  // Distributed mass, the order of integration exchanged (eq. 13.3).
-  const GaussRule g = rule_between(beam.x_left(), beam.x_right(), cuts_of(beam), basis.max_wavenumber());
+  // Distributed mass, the order of integration exchanged (eq. 14.3).
+  // the modal integrals' rule, cut at o as well (where |x| and μ(ξ) kink)
+  const GaussRule g = detail::beam_rule(beam, basis, beam.x_left(), beam.x_right(), 0.0);
   for (int i = 0; i < g.nodes.size(); ++i) {
     const double xi = g.nodes(i);
     double mu = 0.0, sigma = 0.0;
@@ -107,7 +90,7 @@ StiffeningIntegrals stiffening_integrals(const Beam& beam, const AdmissibleBasis
   return s;
 }
 
-ModalIntegrals stiffened_modal_integrals(const Beam& beam, const AdmissibleBasis& basis) {
+ModalIntegrals stiffened_modal_integrals(const Beam& beam, const ShapeBasis& basis) {
   ModalIntegrals mi = modal_integrals(beam, basis);
   StiffeningIntegrals s = stiffening_integrals(beam, basis);
   mi.H_bar = std::move(s.H_bar);

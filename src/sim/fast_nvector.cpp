@@ -36,39 +36,10 @@ extern "C" void ff_linearsum(sunrealtype a, N_Vector x, sunrealtype b, N_Vector 
   }
   for (sunindextype i = 0; i < N; ++i) zd[i] = a * xd[i] + b * yd[i];
 }
-extern "C" void ff_const(sunrealtype c, N_Vector z) {
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(z); i < N; ++i) zd[i] = c;
-}
-extern "C" void ff_prod(N_Vector x, N_Vector y, N_Vector z) {
-  const double *xd = data(x), *yd = data(y);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = xd[i] * yd[i];
-}
-extern "C" void ff_div(N_Vector x, N_Vector y, N_Vector z) {
-  const double *xd = data(x), *yd = data(y);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = xd[i] / yd[i];
-}
 extern "C" void ff_scale(sunrealtype c, N_Vector x, N_Vector z) {
   const double* xd = data(x);
   double* zd = data(z);
   for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = c * xd[i];
-}
-extern "C" void ff_abs(N_Vector x, N_Vector z) {
-  const double* xd = data(x);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = std::abs(xd[i]);
-}
-extern "C" void ff_inv(N_Vector x, N_Vector z) {
-  const double* xd = data(x);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = 1.0 / xd[i];
-}
-extern "C" void ff_addconst(N_Vector x, sunrealtype b, N_Vector z) {
-  const double* xd = data(x);
-  double* zd = data(z);
-  for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = xd[i] + b;
 }
 extern "C" sunrealtype ff_wsqrsum(N_Vector x, N_Vector w) {
   // four partial sums: the sequential sum is latency-bound (the only change of rounding)
@@ -89,38 +60,6 @@ extern "C" sunrealtype ff_wsqrsum(N_Vector x, N_Vector w) {
 }
 extern "C" sunrealtype ff_wrmsnorm(N_Vector x, N_Vector w) {
   return std::sqrt(ff_wsqrsum(x, w) / static_cast<double>(len(x)));
-}
-extern "C" sunrealtype ff_maxnorm(N_Vector x) {
-  const double* xd = data(x);
-  double m = 0.0;
-  for (sunindextype i = 0, N = len(x); i < N; ++i) m = std::abs(xd[i]) > m ? std::abs(xd[i]) : m;
-  return m;
-}
-extern "C" sunrealtype ff_min(N_Vector x) {
-  const double* xd = data(x);
-  double m = xd[0];
-  for (sunindextype i = 1, N = len(x); i < N; ++i) m = xd[i] < m ? xd[i] : m;
-  return m;
-}
-/// z = c0 X0 + c1 X1 + ..., as SUNDIALS' fallback: N_VScale then N_VLinearSum(c_i, X_i, 1, z, z).
-extern "C" int ff_linearcombination(int nvec, sunrealtype* c, N_Vector* X, N_Vector z) {
-  const sunindextype N = len(z);
-  double* zd = data(z);
-  bool alias = false;
-  for (int k = 1; k < nvec; ++k) alias = alias || X[k] == z;
-  if (alias || nvec > 8) {
-    ff_scale(c[0], X[0], z);
-    for (int k = 1; k < nvec; ++k) ff_linearsum(c[k], X[k], 1.0, z, z);
-    return 0;
-  }
-  const double* xs[8];
-  for (int k = 0; k < nvec; ++k) xs[k] = data(X[k]);
-  for (sunindextype i = 0; i < N; ++i) {
-    double v = c[0] * xs[0][i];
-    for (int k = 1; k < nvec; ++k) v = v + c[k] * xs[k][i];
-    zd[i] = v;
-  }
-  return 0;
 }
 /// Z_i = a_i x + Y_i (the fallback N_VLinearSum(a_i, x, 1, Y_i, Z_i) rounds the same way).
 extern "C" int ff_scaleaddmulti(int nvec, sunrealtype* a, N_Vector x, N_Vector* Y, N_Vector* Z) {
@@ -146,20 +85,9 @@ extern "C" int ff_scaleaddmulti(int nvec, sunrealtype* a, N_Vector x, N_Vector* 
 void use_compiled_vector_kernels(N_Vector v) {
   N_Vector_Ops o = v->ops;
   o->nvlinearsum = ff_linearsum;
-  o->nvconst = ff_const;
-  o->nvprod = ff_prod;
-  o->nvdiv = ff_div;
   o->nvscale = ff_scale;
-  o->nvabs = ff_abs;
-  o->nvinv = ff_inv;
-  o->nvaddconst = ff_addconst;
   o->nvwrmsnorm = ff_wrmsnorm;
   o->nvwsqrsumlocal = ff_wsqrsum;
-  o->nvmaxnorm = ff_maxnorm;
-  o->nvmaxnormlocal = ff_maxnorm;
-  o->nvmin = ff_min;
-  o->nvminlocal = ff_min;
-  o->nvlinearcombination = ff_linearcombination;
   o->nvscaleaddmulti = ff_scaleaddmulti;
 }
 

@@ -230,6 +230,9 @@ std::vector<FieldProblem> problems(const IntegratorOptions& o) {
   if (!(o.max_step >= 0.0) || !std::isfinite(o.max_step))
     p.push_back({"max_step", "max_step = " + fmt(o.max_step) + ", expected a finite value >= 0 (0: no limit)"});
   if (o.max_steps <= 0) p.push_back({"max_steps", "max_steps = " + std::to_string(o.max_steps) + ", expected > 0"});
+  if (o.max_total_steps < 0)
+    p.push_back({"max_total_steps",
+                 "max_total_steps = " + std::to_string(o.max_total_steps) + ", expected >= 0 (0: no limit)"});
   if (o.max_order < 0)
     p.push_back({"max_order", "max_order = " + std::to_string(o.max_order) + ", expected >= 0 (0: CVODE's default)"});
   return p;
@@ -386,13 +389,24 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
 
   // Returns false (and fills the failure fields) when CVode failed or the state went non-finite.
   auto advance = [&](double tout, int& flag) {
+    // With a total budget, this call may take only what is left of it.
+    bool budget_binds = false;
+    if (options.max_total_steps > 0) {
+      const long left = options.max_total_steps - result.steps - cv.counters().steps;
+      budget_binds = left < options.max_steps;
+      cv.max_num_steps(std::max(1L, std::min(options.max_steps, left)));
+    }
     const cvodes::Integrator::Advance step = cv.advance(tout);
     flag = step.flag;
     const double tret = step.reached;
     if (flag < 0) {
       result.failure_time = tret;
       result.message = "CVODE failed at t = " + fmt(tret) + ": " + cvodes::Integrator::flag_name(flag);
-      const std::string why = explain(flag, data, cv.last_error(), options.max_steps);
+      const std::string why =
+          flag == CV_TOO_MUCH_WORK && budget_binds
+              ? "the integration's step budget, max_total_steps = " + std::to_string(options.max_total_steps) +
+                    ", is spent; the simulated span needs more work than it allows"
+              : explain(flag, data, cv.last_error(), options.max_steps);
       if (!why.empty()) result.message += " (" + why + ")";
       return false;
     }

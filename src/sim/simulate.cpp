@@ -339,4 +339,54 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
   return out;
 }
 
+SimulationOptions error_reference_options(const SimulationOptions& options) {
+  SimulationOptions o = options;
+  o.integrator.rtol = std::max(options.integrator.rtol / kErrorEstimateFactor, 1e-14);
+  o.integrator.atol = options.integrator.atol / kErrorEstimateFactor;
+  o.integrator.progress = nullptr;
+  return o;
+}
+
+GlobalErrorEstimate compare_runs(const SimulationResult& run, const SimulationResult& reference,
+                                 const SimulationOptions& reference_options) {
+  GlobalErrorEstimate e;
+  e.rtol = reference_options.integrator.rtol;
+  e.atol = reference_options.integrator.atol;
+  e.rhs_evaluations = reference.rhs_evaluations;
+  e.wall_time_s = reference.wall_time_s;
+  if (!run.ok()) {
+    e.message = "the run itself failed";
+    return e;
+  }
+  if (!reference.ok()) {
+    e.message = "the run at rtol " + util::format_number(e.rtol, 3) + " failed: " + reference.message;
+    return e;
+  }
+  if (reference.t.size() != run.t.size() || reference.z.cols() != run.z.cols() ||
+      !(reference.t.array() == run.t.array()).all()) {
+    e.message = "the two runs have different output times";
+    return e;
+  }
+  const Eigen::MatrixXd dz = (run.z - reference.z).cwiseAbs();
+  if (!dz.allFinite() || !(run.z_dot - reference.z_dot).allFinite()) {
+    e.message = "the difference of the two runs is not finite";
+    return e;
+  }
+  const int n = static_cast<int>(dz.cols()) - 3;
+  double worst = -1.0;
+  for (Eigen::Index i = 0; i < dz.rows(); ++i) {
+    const double row = dz.row(i).maxCoeff();
+    if (row > worst) {
+      worst = row;
+      e.worst_time_s = run.t(i);
+    }
+  }
+  e.R_m = dz.leftCols(2).maxCoeff();
+  e.theta_rad = dz.col(2).maxCoeff();
+  e.q = n > 0 ? dz.rightCols(n).maxCoeff() : 0.0;
+  e.rates = (run.z_dot - reference.z_dot).cwiseAbs().maxCoeff();
+  e.available = true;
+  return e;
+}
+
 }  // namespace freeflex

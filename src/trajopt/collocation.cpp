@@ -13,17 +13,16 @@ namespace freeflex {
 
 namespace {
 
-constexpr int nx = RigidDynamics::nx;
-
 std::vector<double> uniform_mesh(int intervals) {
   if (intervals < 1)
     throw std::invalid_argument("collocation: intervals = " + std::to_string(intervals) + ", expected >= 1");
   return std::vector<double>(static_cast<std::size_t>(intervals), 1.0 / intervals);
 }
 
-RigidDynamics checked_dynamics(const FlexibleBody& body, const ManeuverProblem& problem) {
+ManeuverDynamics checked_dynamics(const FlexibleBody& body, const ManeuverProblem& problem) {
   validate(body, problem);
-  return RigidDynamics(body, problem.actuators);
+  if (!problem.elastic) return ManeuverDynamics(body, problem.actuators);
+  return ManeuverDynamics(body, problem.actuators, std::make_shared<const ElasticDynamics>(body, problem.actuators, problem.elastic_modes));
 }
 
 }  // namespace
@@ -61,6 +60,22 @@ double CollocationNlp::T_of(const Eigen::Ref<const Eigen::VectorXd>& w) const {
 
 double CollocationNlp::duration(const Eigen::Ref<const Eigen::VectorXd>& w) const { return T_of(w); }
 
+int CollocationNlp::vib_q_index() const {
+  return point_offset(P_ - 1) + RigidDynamics::nx + dyn_.elastic()->q_index();
+}
+
+int CollocationNlp::vib_qd_index() const {
+  return point_offset(P_ - 1) + RigidDynamics::nx + dyn_.elastic()->q_rate_index();
+}
+
+double CollocationNlp::terminal_vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& w) const {
+  if (!dyn_.elastic()) return 0.0;
+  const ElasticDynamics& el = *dyn_.elastic();
+  const int n = el.n();
+  const auto q = w.segment(vib_q_index(), n), qd = w.segment(vib_qd_index(), n);
+  return 0.5 * qd.dot(el.condensed_mass() * qd) + 0.5 * q.dot(el.stiffness() * q);  // eq. 6.8
+}
+
 void CollocationNlp::check_size(const Eigen::Ref<const Eigen::VectorXd>& w) const {
   if (w.size() != n_)
     throw std::invalid_argument("collocation: w has " + std::to_string(w.size()) + " entries, expected " +
@@ -69,6 +84,7 @@ void CollocationNlp::check_size(const Eigen::Ref<const Eigen::VectorXd>& w) cons
 
 CollocationNlp::Data CollocationNlp::create_data() const {
   const bool compressed = tr_ == Transcription::HermiteSimpsonCompressed;
+  const int nx = nx_;
   Data data;
   Data::Cache& c = data.cache;
   c.f.resize(nx, P_);
@@ -93,10 +109,11 @@ CollocationNlp::Data CollocationNlp::create_data() const {
 
 void CollocationNlp::compressed_midpoints(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w,
                                           bool with_jacobian) const {
+  const int nx = nx_;
   const double T = T_of(w);
   for (int k = 0; k < intervals(); ++k) {
     const double h = sigma_[k] * T;
-    c.xc.col(k) = 0.5 * (w.segment<nx>(point_offset(k)) + w.segment<nx>(point_offset(k + 1))) +
+    c.xc.col(k) = 0.5 * (w.segment(point_offset(k), nx) + w.segment(point_offset(k + 1), nx)) +
                   (h / 8.0) * (c.f.col(k) - c.f.col(k + 1));
     const auto uc = w.segment(mid_control_offset(k), nu_);
     if (with_jacobian) {
@@ -104,7 +121,7 @@ void CollocationNlp::compressed_midpoints(Data::Cache& c, const Eigen::Ref<const
       c.fc.col(k) = c.dyn.f;
       c.Jc.middleCols(static_cast<Eigen::Index>(k) * nz_, nz_) = c.dyn.J;
     } else {
-      c.fc.col(k) = dyn_.eval(c.xc.col(k), uc);
+      c.fc.col(k) = dyn_.calc(c.dyn, c.xc.col(k), uc);
     }
   }
 }
@@ -114,7 +131,7 @@ void CollocationNlp::ensure_f(Data::Cache& c, const Eigen::Ref<const Eigen::Vect
   if (c.f_valid && w == c.w) return;
   for (int j = 0; j < P_; ++j) {
     const int off = point_offset(j);
-    c.f.col(j) = dyn_.eval(w.segment(off, nx), w.segment(off + nx, nu_));
+    c.f.col(j) = dyn_.calc(c.dyn, w.segment(off, nx_), w.segment(off + nx_, nu_));
   }
   if (num_mid_controls()) compressed_midpoints(c, w, false);
   c.w = w;
@@ -127,7 +144,7 @@ void CollocationNlp::ensure_jac(Data::Cache& c, const Eigen::Ref<const Eigen::Ve
   if (c.jac_valid && c.f_valid && w == c.w) return;
   for (int j = 0; j < P_; ++j) {
     const int off = point_offset(j);
-    dyn_.calc_diff(c.dyn, w.segment(off, nx), w.segment(off + nx, nu_));
+    dyn_.calc_diff(c.dyn, w.segment(off, nx_), w.segment(off + nx_, nu_));
     c.f.col(j) = c.dyn.f;
     c.J.middleCols(off, nz_) = c.dyn.J;
   }
@@ -143,30 +160,44 @@ CollocationNlp::Bounds CollocationNlp::bounds() const {
   b.g_lower.resize(m_);
   b.g_upper.resize(m_);
   Eigen::VectorXd &wl = b.w_lower, &wu = b.w_upper, &gl = b.g_lower, &gu = b.g_upper;
+  constexpr int n0 = RigidDynamics::nx;
+  const int n1 = nx_ - n0;
+  const double inf = std::numeric_limits<double>::infinity();
   for (int j = 0; j < P_; ++j) {
     const int off = point_offset(j);
     if (j == 0) {
-      wl.segment<nx>(off) = problem_.x_initial;
-      wu.segment<nx>(off) = problem_.x_initial;
-    } else if (j == P_ - 1) {
-      wl.segment<nx>(off) = problem_.x_final;
-      wu.segment<nx>(off) = problem_.x_final;
+      wl.segment<n0>(off) = problem_.x_initial;
+      wu.segment<n0>(off) = problem_.x_initial;
+      wl.segment(off + n0, n1).setZero();  // the elastic motion starts at rest
+      wu.segment(off + n0, n1).setZero();
     } else {
-      wl.segment<nx>(off) = problem_.x_min;
-      wu.segment<nx>(off) = problem_.x_max;
+      if (j == P_ - 1) {
+        wl.segment<n0>(off) = problem_.x_final;
+        wu.segment<n0>(off) = problem_.x_final;
+      } else {
+        wl.segment<n0>(off) = problem_.x_min;
+        wu.segment<n0>(off) = problem_.x_max;
+      }
+      wl.segment(off + n0, n1).setConstant(-inf);
+      wu.segment(off + n0, n1).setConstant(inf);
     }
   }
   for (const CtrlPoint& cp : ctrl_) {
     wl.segment(cp.offset, nu_) = problem_.u_min;
     wu.segment(cp.offset, nu_) = problem_.u_max;
   }
+  if (problem_.zero_end_commands)
+    for (int j : {0, P_ - 1}) {
+      wl.segment(point_offset(j) + nx_, nu_).setZero();
+      wu.segment(point_offset(j) + nx_, nu_).setZero();
+    }
   if (free_time()) {
     wl(n_ - 1) = problem_.t_min_s;
     wu(n_ - 1) = problem_.t_max_s;
   }
   gl.head(m_defect_).setZero();
   gu.head(m_defect_).setZero();
-  for (const RateRow& r : rates_) {
+  for (const LinearRow& r : rates_) {
     gl(r.row) = r.lower;
     gu(r.row) = r.upper;
   }
@@ -194,6 +225,7 @@ double CollocationNlp::objective(const Eigen::Ref<const Eigen::VectorXd>& w) con
   }
   if (problem_.w_smooth > 0.0)
     for (int k = 0; k < intervals(); ++k) J += problem_.w_smooth * smooth_quadratic(w, k) / (sigma_[k] * T);
+  if (problem_.w_vibration > 0.0) J += problem_.w_vibration * terminal_vibration_energy(w);
   return J;
 }
 
@@ -221,6 +253,12 @@ Eigen::VectorXd CollocationNlp::objective_gradient(const Eigen::Ref<const Eigen:
       dT -= problem_.w_smooth * smooth_quadratic(w, k) / (sigma_[k] * T * T);
     }
   }
+  if (problem_.w_vibration > 0.0) {
+    const ElasticDynamics& el = *dyn_.elastic();
+    const int n = el.n(), iq = vib_q_index(), iqd = vib_qd_index();
+    grad.segment(iq, n) += problem_.w_vibration * (el.stiffness() * w.segment(iq, n));
+    grad.segment(iqd, n) += problem_.w_vibration * (el.condensed_mass() * w.segment(iqd, n));
+  }
   if (free_time()) grad(n_ - 1) = dT;
   return grad;
 }
@@ -234,31 +272,33 @@ const Eigen::VectorXd& CollocationNlp::constraints(Data& data, const Eigen::Ref<
 void CollocationNlp::constraints_into(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w,
                                       Eigen::Ref<Eigen::VectorXd> g) const {
   ensure_f(c, w);
+  const int nx = nx_;
   const Eigen::MatrixXd& f_ = c.f;
   const Eigen::MatrixXd& fc_ = c.fc;
   const double T = T_of(w);
   for (const Block& bl : blocks_) {
     const double h = sigma_[bl.interval] * T;
-    auto d = g.segment<nx>(bl.row);
+    auto d = g.segment(bl.row, nx);
     d.setZero();
     for (const Term& tm : bl.terms) {
-      if (tm.beta != 0.0) d += tm.beta * w.segment<nx>(point_offset(tm.point));
+      if (tm.beta != 0.0) d += tm.beta * w.segment(point_offset(tm.point), nx);
       if (tm.alpha != 0.0) d -= (h * tm.alpha) * f_.col(tm.point);
     }
   }
   for (int k = 0; k < num_mid_controls(); ++k) {
     const double h = sigma_[k] * T;
-    g.segment<nx>(nx * k) = w.segment<nx>(point_offset(k + 1)) - w.segment<nx>(point_offset(k)) -
+    g.segment(nx * k, nx) = w.segment(point_offset(k + 1), nx) - w.segment(point_offset(k), nx) -
                             (h / 6.0) * (f_.col(k) + 4.0 * fc_.col(k) + f_.col(k + 1));
   }
-  for (const RateRow& r : rates_) {
+  for (const LinearRow& r : rates_) {
     double v = r.time_coef * (free_time() ? T : 0.0);
-    for (const auto& pc : r.coef) v += pc.second * w(pc.first + r.actuator);
+    for (const auto& pc : r.coef) v += pc.second * w(pc.first);
     g(r.row) = v;
   }
 }
 
 void CollocationNlp::compressed_jacobian_block(Data::Cache& c, int k, double T) const {
+  const int nx = nx_;
   const Eigen::MatrixXd &f_ = c.f, &fc_ = c.fc, &J_ = c.J, &Jc_ = c.Jc;
   Eigen::MatrixXd &Y_ = c.Y, &D_ = c.D;
   // d = x_b − x_a − h/6 (f_a + 4 f_c + f_b),  x_c = (x_a + x_b)/2 + h/8 (f_a − f_b)
@@ -266,15 +306,15 @@ void CollocationNlp::compressed_jacobian_block(Data::Cache& c, int k, double T) 
   const auto Ja = J_.middleCols(point_offset(k), nz_);
   const auto Jb = J_.middleCols(point_offset(k + 1), nz_);
   const auto Jc = Jc_.middleCols(static_cast<Eigen::Index>(k) * nz_, nz_);
-  const auto Jcx = Jc.leftCols<nx>();
+  const auto Jcx = Jc.leftCols(nx);
   // Y = ∂x_c/∂(z_a, z_b) in columns 0..2nz-1 (the u_c and T columns are set apart).
-  Y_.topRows<nx>().leftCols(nz_) = (h / 8.0) * Ja;
-  Y_.topRows<nx>().middleCols(nz_, nz_) = (-h / 8.0) * Jb;
+  Y_.topRows(nx).leftCols(nz_) = (h / 8.0) * Ja;
+  Y_.topRows(nx).middleCols(nz_, nz_) = (-h / 8.0) * Jb;
   for (int i = 0; i < nx; ++i) {
     Y_(i, i) += 0.5;
     Y_(i, nz_ + i) += 0.5;
   }
-  D_.leftCols(2 * nz_).noalias() = (-4.0 * h / 6.0) * Jcx * Y_.topRows<nx>().leftCols(2 * nz_);
+  D_.leftCols(2 * nz_).noalias() = (-4.0 * h / 6.0) * Jcx * Y_.topRows(nx).leftCols(2 * nz_);
   D_.leftCols(nz_) -= (h / 6.0) * Ja;
   D_.middleCols(nz_, nz_) -= (h / 6.0) * Jb;
   for (int i = 0; i < nx; ++i) {
@@ -293,6 +333,7 @@ const Eigen::VectorXd& CollocationNlp::jacobian_values(Data& data, const Eigen::
   const Eigen::MatrixXd &f_ = c.f, &J_ = c.J, &D_ = c.D;
   Eigen::VectorXd& values = data.jacobian;
   values.resize(jacobian_nonzeros());
+  const int nx = nx_;
   const double T = T_of(w);
   for (std::size_t b = 0; b < blocks_.size(); ++b) {
     const Block& bl = blocks_[b];
@@ -306,9 +347,9 @@ const Eigen::VectorXd& CollocationNlp::jacobian_values(Data& data, const Eigen::
         values(idx++) = (rc.first == rc.second ? tm.beta : 0.0) - h * tm.alpha * Jj(rc.first, rc.second);
     }
     if (free_time()) {
-      Eigen::Matrix<double, nx, 1> dT = Eigen::Matrix<double, nx, 1>::Zero();
+      auto dT = values.segment(block_time_start_[b], nx);
+      dT.setZero();
       for (const Term& tm : bl.terms) dT -= (sigma_[bl.interval] * tm.alpha) * f_.col(tm.point);
-      values.segment<nx>(block_time_start_[b]) = dT;
     }
   }
   for (int k = 0; k < num_mid_controls(); ++k) {
@@ -320,7 +361,7 @@ const Eigen::VectorXd& CollocationNlp::jacobian_values(Data& data, const Eigen::
   for (std::size_t i = 0; i < rates_.size(); ++i) {
     int idx = rate_start_[i];
     for (const auto& pc : rates_[i].coef) values(idx++) = pc.second;
-    if (free_time()) values(idx) = rates_[i].time_coef;
+    if (free_time() && rates_[i].timed) values(idx) = rates_[i].time_coef;
   }
   return values;
 }
@@ -335,6 +376,7 @@ CollocationNlp::Midpoints CollocationNlp::midpoints(const Eigen::Ref<const Eigen
   if (!has_midpoints(tr_)) throw std::logic_error("collocation: the trapezoidal transcription has no midpoints");
   check_size(w);
   const int N = intervals();
+  const int nx = nx_;
   Midpoints mid;
   Eigen::MatrixXd &x_mid = mid.x, &u_mid = mid.u;
   x_mid.resize(N, nx);
@@ -345,7 +387,7 @@ CollocationNlp::Midpoints CollocationNlp::midpoints(const Eigen::Ref<const Eigen
     if (num_mid_controls())
       x_mid.row(k) = data.cache.xc.col(k).transpose();
     else
-      x_mid.row(k) = w.segment<nx>(point_offset(first_point(k) + 1)).transpose();
+      x_mid.row(k) = w.segment(point_offset(first_point(k) + 1), nx).transpose();
     u_mid.row(k) = w.segment(ctrl_[ctrl_of(k, 1)].offset, nu_).transpose();
   }
   return mid;
@@ -355,13 +397,14 @@ std::shared_ptr<const CollocationTrajectory> CollocationNlp::trajectory(const Ei
   check_size(w);
   const int N = intervals();
   const double T = T_of(w);
+  const int nx = nx_;
   Eigen::VectorXd t(N + 1);
   Eigen::MatrixXd x(N + 1, nx), u(N + 1, nu_);
   Midpoints mid;
   for (int k = 0; k <= N; ++k) {
     const int j = first_point(k);
     t(k) = tau_[j] * T;
-    x.row(k) = w.segment<nx>(point_offset(j)).transpose();
+    x.row(k) = w.segment(point_offset(j), nx).transpose();
     u.row(k) = w.segment(point_offset(j) + nx, nu_).transpose();
   }
   if (has_midpoints(tr_)) mid = midpoints(w);

@@ -8,10 +8,6 @@
 
 namespace freeflex {
 
-namespace {
-constexpr int nx = RigidDynamics::nx;
-}  // namespace
-
 const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::Ref<const Eigen::VectorXd>& w,
                                                       double obj_factor,
                                                       const Eigen::Ref<const Eigen::VectorXd>& lambda) const {
@@ -23,6 +19,7 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
   const Eigen::MatrixXd &f_ = c.f, &J_ = c.J, &Jc_ = c.Jc, &xc_ = c.xc;
   Eigen::VectorXd& values = data.hessian;
   values.resize(hessian_nonzeros());
+  const int nx = nx_;
   const double T = T_of(w);
   values.setZero();
   // Each point's dynamics enter the defects linearly through h α f_j: collect the
@@ -31,7 +28,7 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
   nu_eff_.setZero();
   for (const Block& bl : blocks_) {
     const double s = sigma_[bl.interval];
-    const auto mu = lambda.segment<nx>(bl.row);
+    const auto mu = lambda.segment(bl.row, nx);
     for (const Term& tm : bl.terms) {
       if (tm.alpha == 0.0) continue;
       lam_eff_.col(tm.point) -= (s * T * tm.alpha) * mu;
@@ -46,24 +43,24 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
   // ∇²x_c = h/8 (f_a'' − f_b''), plus the terms from s and h depending on T.
   for (int k = 0; k < num_mid_controls(); ++k) {
     const double sg = sigma_[k], h = sg * T, s = -4.0 * h / 6.0, ds = -4.0 * sg / 6.0;
-    const auto lam = lambda.segment<nx>(nx * k);
+    const auto lam = lambda.segment(nx * k, nx);
     const auto Ja = J_.middleCols(point_offset(k), nz_);
     const auto Jb = J_.middleCols(point_offset(k + 1), nz_);
     const auto Jc = Jc_.middleCols(static_cast<Eigen::Index>(k) * nz_, nz_);
-    const Eigen::Matrix<double, nx, 1> mu = Jc.leftCols<nx>().transpose() * lam;
+    const Eigen::VectorXd mu = Jc.leftCols(nx).transpose() * lam;
     lam_eff_.col(k) += -(h / 6.0) * lam + (s * h / 8.0) * mu;
     lam_eff_.col(k + 1) += -(h / 6.0) * lam - (s * h / 8.0) * mu;
     // Y = ∂y/∂(z_a, z_b, u_c, T)
     Y_.setZero();
-    Y_.topRows<nx>().leftCols(nz_) = (h / 8.0) * Ja;
-    Y_.topRows<nx>().middleCols(nz_, nz_) = (-h / 8.0) * Jb;
+    Y_.topRows(nx).leftCols(nz_) = (h / 8.0) * Ja;
+    Y_.topRows(nx).middleCols(nz_, nz_) = (-h / 8.0) * Jb;
     for (int i = 0; i < nx; ++i) {
       Y_(i, i) += 0.5;
       Y_(i, nz_ + i) += 0.5;
     }
     for (int i = 0; i < nu_; ++i) Y_(nx + i, 2 * nz_ + i) = 1.0;
     const int q = static_cast<int>(Y_.cols());
-    if (free_time()) Y_.col(q - 1).head<nx>() = (sg / 8.0) * (f_.col(k) - f_.col(k + 1));
+    if (free_time()) Y_.col(q - 1).head(nx) = (sg / 8.0) * (f_.col(k) - f_.col(k + 1));
     Eigen::MatrixXd& Hbuf_ = c.dyn.H;
     dyn_.calc_hessian(c.dyn, xc_.col(k), w.segment(mid_control_offset(k), nu_), lam);
     Hbuf_ *= s;
@@ -97,6 +94,15 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
     }
   }
   if (obj_factor == 0.0) return values;
+  if (problem_.w_vibration > 0.0) {
+    const ElasticDynamics& el = *dyn_.elastic();
+    const int n = el.n();
+    const double wv = obj_factor * problem_.w_vibration;
+    for (std::size_t e = 0; e < vib_slots_.size(); ++e) {
+      const int i = vib_ij_[e].first, j = vib_ij_[e].second;
+      values(vib_slots_[e]) += wv * (i < n ? el.stiffness()(i, j) : el.condensed_mass()(i - n, j));
+    }
+  }
   if (problem_.w_energy > 0.0) {
     const double we = obj_factor * problem_.w_energy;
     for (std::size_t cp = 0; cp < ctrl_.size(); ++cp)

@@ -10,14 +10,11 @@
 
 namespace freeflex {
 
-namespace {
-constexpr int nx = RigidDynamics::nx;
-}  // namespace
-
 void CollocationNlp::build() {
   build_layout();
   build_defect_rows();
   build_rate_rows();
+  build_linear_rows();
   build_jacobian_structure();
   build_hessian_structure();
 }
@@ -27,8 +24,10 @@ void CollocationNlp::build() {
 void CollocationNlp::build_layout() {
   const bool trap = tr_ == Transcription::Trapezoidal;
   const int N = intervals();
+  nx_ = dyn_.nx();
   nu_ = dyn_.nu();
-  nz_ = nx + nu_;
+  nz_ = nx_ + nu_;
+  const int nx = nx_;
   P_ = tr_ == Transcription::HermiteSimpson ? 2 * N + 1 : N + 1;
   n_ = P_ * nz_ + num_mid_controls() * nu_ + (free_time() ? 1 : 0);
   const int npi = points_per_interval();
@@ -66,6 +65,7 @@ void CollocationNlp::build_defect_rows() {
   const bool trap = tr_ == Transcription::Trapezoidal;
   const bool compressed = tr_ == Transcription::HermiteSimpsonCompressed;
   const int N = intervals();
+  const int nx = nx_;
   int row = 0;
   blocks_.clear();
   if (compressed) {
@@ -106,26 +106,79 @@ void CollocationNlp::build_rate_rows() {
         if (!std::isfinite(du)) continue;
         for (const auto& combo : combos) {
           std::vector<std::pair<int, double>> coef;
-          for (int i = 0; i < npi; ++i) coef.emplace_back(ctrl_[ctrl_of(k, i)].offset, combo[i]);
+          for (int i = 0; i < npi; ++i) coef.emplace_back(ctrl_[ctrl_of(k, i)].offset + act, combo[i]);
           if (free_time()) {
-            rates_.push_back({row++, act, coef, -du * sigma_[k], -inf, 0.0});
-            rates_.push_back({row++, act, coef, du * sigma_[k], 0.0, inf});
+            rates_.push_back({row++, coef, true, -du * sigma_[k], -inf, 0.0});
+            rates_.push_back({row++, coef, true, du * sigma_[k], 0.0, inf});
           } else {
             const double bound = du * sigma_[k] * problem_.duration_s;
-            rates_.push_back({row++, act, coef, 0.0, -bound, bound});
+            rates_.push_back({row++, coef, false, 0.0, -bound, bound});
           }
         }
       }
     }
   }
   m_ = row;
+}
 
+/// The other linear rows, after the rate rows: Bernstein bounds of the quadratic
+/// controls (HS forms), tip deflections and the terminal modal conditions (elastic).
+void CollocationNlp::build_linear_rows() {
+  const int N = intervals();
+  int row = m_;
+  if (has_midpoints(tr_))
+    for (int k = 0; k < N; ++k)
+      for (int act = 0; act < nu_; ++act) {
+        const double lo = problem_.u_min(act), hi = problem_.u_max(act);
+        if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
+        // middle Bernstein coefficient of the quadratic through u_a, u_c, u_b
+        std::vector<std::pair<int, double>> coef{{ctrl_[ctrl_of(k, 0)].offset + act, -0.5},
+                                                 {ctrl_[ctrl_of(k, 1)].offset + act, 2.0},
+                                                 {ctrl_[ctrl_of(k, 2)].offset + act, -0.5}};
+        rates_.push_back({row++, coef, false, 0.0, lo, hi});
+      }
+  rest_modes_.clear();
+  if (const ElasticDynamics* el = dyn_.elastic()) {
+    constexpr int n0 = RigidDynamics::nx;
+    const int n = el->n();
+    const double lim = problem_.tip_deflection_limit_m;
+    if (std::isfinite(lim))
+      for (int j = 1; j < P_; ++j)
+        for (const Eigen::RowVectorXd* phi : {&el->phi_left(), &el->phi_right()}) {
+          std::vector<std::pair<int, double>> coef;
+          for (int i = 0; i < n; ++i) coef.emplace_back(point_offset(j) + n0 + el->q_index() + i, (*phi)(i));
+          rates_.push_back({row++, coef, false, 0.0, -lim, lim});
+        }
+    if (problem_.modes_at_rest == ManeuverProblem::all_modes) {
+      for (int i = 0; i < n; ++i) rest_modes_.push_back(i);
+    } else if (problem_.modes_at_rest > 0) {
+      const std::vector<int> ex = el->excited_modes(problem_.x_initial(2));
+      if (static_cast<int>(ex.size()) < problem_.modes_at_rest)
+        throw std::invalid_argument("maneuver problem: modes_at_rest = " + std::to_string(problem_.modes_at_rest) +
+                                    ", but the actuators excite only " + std::to_string(ex.size()) +
+                                    " elastic modes of this body");
+      rest_modes_.assign(ex.begin(), ex.begin() + problem_.modes_at_rest);
+    }
+    const int last = point_offset(P_ - 1) + n0;
+    for (int j : rest_modes_) {
+      const Eigen::RowVectorXd r = el->modal_rows().row(j);
+      for (int side = 0; side < 2; ++side) {  // ω_j η_j(T) = 0, η_j'(T) = 0
+        const int base = last + (side == 0 ? el->q_index() : el->q_rate_index());
+        const double scale = side == 0 ? el->mode_frequencies()(j) : 1.0;
+        std::vector<std::pair<int, double>> coef;
+        for (int i = 0; i < n; ++i) coef.emplace_back(base + i, scale * r(i));
+        rates_.push_back({row++, coef, false, 0.0, 0.0, 0.0});
+      }
+    }
+  }
+  m_ = row;
 }
 
 /// Triplets of the constraint Jacobian and where each block's values start.
 void CollocationNlp::build_jacobian_structure() {
   const bool compressed = tr_ == Transcription::HermiteSimpsonCompressed;
   const int N = intervals();
+  const int nx = nx_;
   const int Tidx = time_index();
   const auto& fpat = dyn_.jacobian_pattern();
   pat_[0].clear();
@@ -177,9 +230,9 @@ void CollocationNlp::build_jacobian_structure() {
     rate_start_[i] = static_cast<int>(jac_rows_.size());
     for (const auto& pc : rates_[i].coef) {
       jac_rows_.push_back(rates_[i].row);
-      jac_cols_.push_back(pc.first + rates_[i].actuator);
+      jac_cols_.push_back(pc.first);
     }
-    if (free_time()) {
+    if (free_time() && rates_[i].timed) {
       jac_rows_.push_back(rates_[i].row);
       jac_cols_.push_back(Tidx);
     }
@@ -247,6 +300,18 @@ void CollocationNlp::build_hessian_structure() {
                                                     ctrl_[ctrl_of(k, smooth_pair_j_[p])].offset + a));
     if (free_time()) TT_slot_ = slot(Tidx, Tidx);
   }
+  vib_slots_.clear();
+  vib_ij_.clear();
+  if (problem_.w_vibration > 0.0) {
+    const int n = dyn_.elastic()->n();
+    for (int side = 0; side < 2; ++side)
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j <= i; ++j) {
+          const int base = side == 0 ? vib_q_index() : vib_qd_index();
+          vib_slots_.push_back(slot(base + i, base + j));
+          vib_ij_.emplace_back(i + side * n, j);
+        }
+  }
   build_compressed_hessian_structure(slot);
 }
 
@@ -254,6 +319,7 @@ void CollocationNlp::build_hessian_structure() {
 /// and their slots per interval.
 void CollocationNlp::build_compressed_hessian_structure(const std::function<int(int, int)>& slot) {
   const bool compressed = tr_ == Transcription::HermiteSimpsonCompressed;
+  const int nx = nx_;
   const int Tidx = time_index();
   const auto& fpat = dyn_.jacobian_pattern();
   // H_c lives on the z-indices of dyn_.hessian_pattern(); row i < 6 of Y is

@@ -77,8 +77,39 @@ std::vector<FieldProblem> problems(const ManeuverProblem& p, int ne) {
   for (const auto& w : weights)
     if (!(w.second >= 0.0) || !std::isfinite(w.second))
       err.push_back(w.first, std::string(w.first) + " = " + num(w.second) + ", expected a finite value >= 0");
-  if (!(p.w_energy > 0.0 || p.w_time > 0.0 || p.w_smooth > 0.0))
-    err.push_back("w_energy", "w_energy, w_time and w_smooth are all 0, expected at least one > 0");
+  if (!(p.w_vibration >= 0.0) || !std::isfinite(p.w_vibration))
+    err.push_back("w_vibration", "w_vibration = " + num(p.w_vibration) + ", expected a finite value >= 0");
+  if (!(p.w_energy > 0.0 || p.w_time > 0.0 || p.w_smooth > 0.0 || p.w_vibration > 0.0))
+    err.push_back("w_energy", "w_energy, w_time, w_smooth and w_vibration are all 0, expected at least one > 0");
+  if (p.modes_at_rest < ManeuverProblem::all_modes)
+    err.push_back("modes_at_rest", "modes_at_rest = " + std::to_string(p.modes_at_rest) +
+                  ", expected >= 0 or all_modes (-1)");
+  if (!(p.tip_deflection_limit_m > 0.0))
+    err.push_back("tip_deflection_limit_m", "tip_deflection_limit_m = " + num(p.tip_deflection_limit_m) +
+                  ", expected > 0 (infinity for no bound)");
+  if (p.zero_end_commands && p.u_min.size() == nu && p.u_max.size() == nu)
+    for (int k = 0; k < nu; ++k)
+      if (p.u_min(k) > 0.0 || p.u_max(k) < 0.0)
+        err.push_back(item("u_min", k), "zero_end_commands needs 0 within [u_min, u_max], got " + item("u_min", k) +
+                      " = " + num(p.u_min(k)) + ", " + item("u_max", k) + " = " + num(p.u_max(k)));
+  if (p.elastic_modes < ManeuverProblem::all_modes || p.elastic_modes == 0)
+    err.push_back("elastic_modes", "elastic_modes = " + std::to_string(p.elastic_modes) +
+                  ", expected >= 1 or all_modes (-1)");
+  else if (p.elastic_modes > 0 && p.modes_at_rest > p.elastic_modes)
+    err.push_back("modes_at_rest", "modes_at_rest = " + std::to_string(p.modes_at_rest) +
+                  ", expected at most elastic_modes = " + std::to_string(p.elastic_modes) +
+                  " (the modes the problem holds)");
+  if (!p.elastic) {
+    if (p.elastic_modes != ManeuverProblem::all_modes)
+      err.push_back("elastic_modes", "elastic_modes = " + std::to_string(p.elastic_modes) + " needs elastic = true");
+    if (p.modes_at_rest != 0)
+      err.push_back("modes_at_rest", "modes_at_rest = " + std::to_string(p.modes_at_rest) + " needs elastic = true");
+    if (p.w_vibration != 0.0)
+      err.push_back("w_vibration", "w_vibration = " + num(p.w_vibration) + " needs elastic = true");
+    if (p.tip_deflection_limit_m != ManeuverProblem::inf)
+      err.push_back("tip_deflection_limit_m",
+                    "tip_deflection_limit_m = " + num(p.tip_deflection_limit_m) + " needs elastic = true");
+  }
   if (p.w_time > 0.0 && !p.free_time)
     err.push_back("w_time", "w_time = " + num(p.w_time) + " with a fixed duration, expected free_time = true");
   if (p.energy_weights.size() != 0 && check_size(p.energy_weights, "energy_weights"))
@@ -111,9 +142,28 @@ std::vector<FieldProblem> problems(const TrajoptOptions& o) {
 }
 
 void validate(const FlexibleBody& body, const ManeuverProblem& problem) {
-  throw_if_any("maneuver problem", problems(problem, static_cast<int>(body.elements().size())));
+  std::vector<FieldProblem> list = problems(problem, static_cast<int>(body.elements().size()));
+  if (problem.elastic && problem.elastic_modes > body.n())
+    list.push_back({"elastic_modes", "elastic_modes = " + std::to_string(problem.elastic_modes) +
+                                         ", expected at most the " + std::to_string(body.n()) +
+                                         " elastic coordinates of the body"});
+  if (problem.elastic && problem.modes_at_rest > body.n())
+    list.push_back({"modes_at_rest", "modes_at_rest = " + std::to_string(problem.modes_at_rest) +
+                                         ", expected at most the " + std::to_string(body.n()) +
+                                         " elastic coordinates of the body"});
+  throw_if_any("maneuver problem", list);
 }
 
 void validate(const TrajoptOptions& options) { throw_if_any("trajopt options", problems(options)); }
+
+ManeuverProblem rigid_counterpart(const ManeuverProblem& problem) {
+  ManeuverProblem p = problem;
+  p.elastic = false;
+  p.elastic_modes = ManeuverProblem::all_modes;
+  p.modes_at_rest = 0;
+  p.w_vibration = 0.0;
+  p.tip_deflection_limit_m = ManeuverProblem::inf;
+  return p;
+}
 
 }  // namespace freeflex

@@ -2,7 +2,9 @@
 // solve per mesh, each warm-started from the interpolated solution of the last.
 #include "freeflex/trajopt/solve.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -31,6 +33,9 @@ std::vector<double> refine(const std::vector<double>& sigma, const Eigen::Vector
 
 }  // namespace
 
+static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
+                                  const TrajoptOptions& options, std::chrono::steady_clock::time_point start);
+
 Eigen::VectorXd TrajoptResult::control_at(double t_s) const {
   if (!trajectory) return Eigen::VectorXd::Zero(u.cols());
   return trajectory->control_at(t_s);
@@ -41,6 +46,24 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
   validate(body, problem);
   validate(options);
 
+  // The separated Hermite–Simpson KKT system of the elastic problem factors in time linear
+  // in N with MUMPS' approximate minimum degree ordering, superlinear with the approximate
+  // minimum fill that suits the rest (NOA 6, N = 400 / 800: 2x / 3x slower;
+  // docs/benchmarks.md). A user's own mumps_pivot_order wins.
+  TrajoptOptions tuned;
+  const TrajoptOptions* opts = &options;
+  if (problem.elastic && options.transcription == Transcription::HermiteSimpson &&
+      std::none_of(options.ipopt_options.begin(), options.ipopt_options.end(),
+                   [](const auto& kv) { return kv.first == "mumps_pivot_order"; })) {
+    tuned = options;
+    tuned.ipopt_options.insert(tuned.ipopt_options.begin(), {"mumps_pivot_order", "0"});
+    opts = &tuned;
+  }
+  return solve_maneuver_with(body, problem, *opts, start);
+}
+
+static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
+                                  const TrajoptOptions& options, std::chrono::steady_clock::time_point start) {
   TrajoptResult res;
   res.transcription = options.transcription;
   std::vector<double> mesh(static_cast<std::size_t>(options.intervals), 1.0 / options.intervals);
@@ -67,12 +90,36 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
       res.trajectory = nlp.trajectory(w);
       res.max_error_estimate = res.trajectory->interval_errors().maxCoeff();
       res.t = res.trajectory->knot_times();
-      res.x = res.trajectory->knot_states();
+      res.x = res.trajectory->knot_states().leftCols<6>();
+      res.x_elastic = res.trajectory->knot_states().rightCols(nlp.state_size() - 6);
+      res.terminal_vibration_energy_J = nlp.terminal_vibration_energy(w);
+      if (const ElasticDynamics* el = nlp.dynamics().elastic()) {
+        res.peak_tip_deflection_m = 0.0;
+        for (int j = 0; j < nlp.num_points(); ++j) {
+          const auto q = w.segment(nlp.point_offset(j) + 6 + el->q_index(), el->n());
+          res.peak_tip_deflection_m =
+              std::max({res.peak_tip_deflection_m, std::abs(el->phi_left().dot(q)), std::abs(el->phi_right().dot(q))});
+        }
+      }
       res.u = res.trajectory->knot_controls();
       const int N = nlp.intervals(), nu = nlp.dynamics().nu();
+      // ∫ uᵀ W u dt of the commands as flown: 3-point Gauss–Legendre per interval is exact
+      // for the piecewise-quadratic (or linear) controls.
+      const Eigen::VectorXd W =
+          problem.energy_weights.size() == nu ? problem.energy_weights : Eigen::VectorXd::Ones(nu);
+      static const double gx[3] = {0.5 - 0.5 * 0.7745966692414834, 0.5, 0.5 + 0.5 * 0.7745966692414834};
+      static const double gw[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+      res.control_energy = 0.0;
+      for (int k = 0; k < N; ++k) {
+        const double ta = res.t(k), h = res.t(k + 1) - ta;
+        for (int g = 0; g < 3; ++g) {
+          const Eigen::VectorXd u = res.trajectory->control_at(Instant{ta + gx[g] * h, ta + 0.5 * h});
+          res.control_energy += gw[g] * h * u.dot(W.cwiseProduct(u));
+        }
+      }
       if (has_midpoints(options.transcription)) {
         CollocationNlp::Midpoints mid = nlp.midpoints(w);
-        res.x_mid = std::move(mid.x);
+        res.x_mid = mid.x.leftCols<6>();
         res.u_mid = std::move(mid.u);
         res.t_mid.resize(N);
         for (int k = 0; k < N; ++k) res.t_mid(k) = nlp.mid_fraction(k) * res.duration_s;

@@ -19,7 +19,7 @@ std::string shape(const Eigen::MatrixXd& m) {
 
 }  // namespace
 
-CollocationTrajectory::CollocationTrajectory(RigidDynamics dynamics, Transcription transcription, Eigen::VectorXd t,
+CollocationTrajectory::CollocationTrajectory(ManeuverDynamics dynamics, Transcription transcription, Eigen::VectorXd t,
                                              Eigen::MatrixXd x, Eigen::MatrixXd u, Eigen::MatrixXd u_mid)
     : dyn_(std::move(dynamics)), tr_(transcription), t_(std::move(t)), x_(std::move(x)), u_(std::move(u)),
       u_mid_(std::move(u_mid)) {
@@ -29,16 +29,17 @@ CollocationTrajectory::CollocationTrajectory(RigidDynamics dynamics, Transcripti
     if (!(t_(i) > t_(i - 1)))
       throw std::invalid_argument("collocation trajectory: knot times must be strictly ascending (t[" +
                                   std::to_string(i) + "] = " + std::to_string(t_(i)) + ")");
-  if (x_.rows() != K || x_.cols() != 6)
+  const int nx = dyn_.nx();
+  if (x_.rows() != K || x_.cols() != nx)
     throw std::invalid_argument("collocation trajectory: x is " + shape(x_) + ", expected " + std::to_string(K) +
-                                " x 6");
+                                " x " + std::to_string(nx));
   if (u_.rows() != K || u_.cols() != nu)
     throw std::invalid_argument("collocation trajectory: u is " + shape(u_) + ", expected " + std::to_string(K) +
                                 " x " + std::to_string(nu));
   if (has_midpoints(tr_) && (u_mid_.rows() != K - 1 || u_mid_.cols() != nu))
     throw std::invalid_argument("collocation trajectory: u_mid is " + shape(u_mid_) + ", expected " +
                                 std::to_string(K - 1) + " x " + std::to_string(nu) + " for Hermite-Simpson");
-  f_.resize(K, 6);
+  f_.resize(K, nx);
   for (Eigen::Index i = 0; i < K; ++i) f_.row(i) = dyn_.eval(x_.row(i).transpose(), u_.row(i).transpose()).transpose();
 }
 
@@ -53,7 +54,7 @@ int CollocationTrajectory::interval_of(double t) const {
   return std::clamp(k, 0, intervals() - 1);
 }
 
-Vector6d CollocationTrajectory::state_in(int k, double t, Vector6d* rate) const {
+Eigen::VectorXd CollocationTrajectory::state_in(int k, double t, Eigen::VectorXd* rate) const {
   const double h = t_(k + 1) - t_(k), s = (t - t_(k)) / h, s2 = s * s, s3 = s2 * s;
   const auto xa = x_.row(k).transpose(), xb = x_.row(k + 1).transpose();
   const auto fa = f_.row(k).transpose(), fb = f_.row(k + 1).transpose();
@@ -73,8 +74,8 @@ Eigen::VectorXd CollocationTrajectory::control_in(int k, double t) const {
 RigidState CollocationTrajectory::at(const Instant& when) const {
   const int k = interval_of(when.piece_mid);
   const double t = std::clamp(when.t, t_begin(), t_end());
-  const Vector6d x = state_in(k, t, nullptr);
-  const Vector6d f = dyn_.eval(x, control_in(k, t));
+  const Vector6d x = state_in(k, t, nullptr).head<6>();
+  const Vector6d f = dyn_.rigid().eval(x, control_in(k, t));
   RigidState r;
   r.pos = x.head<3>();
   r.vel = x.tail<3>();
@@ -92,6 +93,10 @@ Eigen::VectorXd CollocationTrajectory::control_at(const Instant& when) const {
 Vector6d CollocationTrajectory::state_at(double t) const { return state_at(Instant::at(t)); }
 
 Vector6d CollocationTrajectory::state_at(const Instant& when) const {
+  return state_in(interval_of(when.piece_mid), std::clamp(when.t, t_begin(), t_end()), nullptr).head<6>();
+}
+
+Eigen::VectorXd CollocationTrajectory::full_state_at(const Instant& when) const {
   return state_in(interval_of(when.piece_mid), std::clamp(when.t, t_begin(), t_end()), nullptr);
 }
 
@@ -104,10 +109,10 @@ Eigen::VectorXd CollocationTrajectory::interval_errors() const {
   Eigen::VectorXd e(intervals());
   for (int k = 0; k < intervals(); ++k) {
     const double h = t_(k + 1) - t_(k);
-    Vector6d acc = Vector6d::Zero(), rate;
+    Eigen::VectorXd acc = Eigen::VectorXd::Zero(dyn_.nx()), rate;
     for (int q = 0; q < 5; ++q) {
       const double t = t_(k) + node[q] * h;
-      const Vector6d x = state_in(k, t, &rate);
+      const Eigen::VectorXd x = state_in(k, t, &rate);
       acc += (weight[q] * h) * (rate - dyn_.eval(x, control_in(k, t))).cwiseAbs();
     }
     e(k) = acc.maxCoeff();

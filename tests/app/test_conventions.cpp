@@ -50,6 +50,7 @@ TEST_CASE("every Options struct's defaults are valid", "[api]") {
   CHECK_NOTHROW(validate(SwitchTimeOptions{}));
   CHECK_NOTHROW(validate(SuppressionOptions{}));
   CHECK_NOTHROW(validate(RunOptions{}));  // no directory: the studies run, nothing is written
+  CHECK_NOTHROW(validate(PlotOptions{}));
   // and each validate() does reject a setting out of range, naming it
   auto rejects = [](auto options, auto spoil, const std::string& expect) {
     spoil(options);
@@ -64,6 +65,18 @@ TEST_CASE("every Options struct's defaults are valid", "[api]") {
   rejects(SwitchTimeOptions{}, [](auto& o) { o.starts = 0; }, "starts");
   rejects(SuppressionOptions{}, [](auto& o) { o.tvlqr.rtol = 0.0; }, "rtol");
   rejects(RunOptions{}, [](auto& o) { o.out_dir = std::string("a\0b", 3); }, "out_dir");
+  rejects(PlotOptions{}, [](auto& o) { o.timeout_s = -1.0; }, "timeout_s = -1");
+  rejects(RunOptions{}, [](auto& o) { o.plot.timeout_s = 1e9; }, "timeout_s = 1e+09");
+  rejects(IntegratorOptions{}, [](auto& o) { o.max_total_steps = -1; }, "max_total_steps = -1");
+  rejects(SwitchTimeOptions{}, [](auto& o) { o.max_steps_per_simulation = -1; }, "max_steps_per_simulation");
+  CHECK_NOTHROW(validate(DiscretizeOptions{}));
+  CHECK_NOTHROW(validate(PlantOptions{}));
+  CHECK_NOTHROW(validate(SampledLoopOptions{}));
+  CHECK_NOTHROW(validate(SweepExecution{}));
+  rejects(DiscretizeOptions{}, [](auto& o) { o.integrator.rtol = -1.0; }, "rtol = -1");
+  rejects(PlantOptions{}, [](auto& o) { o.delay_s = -0.1; }, "delay_s = -0.1");
+  rejects(SampledLoopOptions{}, [](auto& o) { o.sample_rate_hz = 0.0; }, "sample_rate_hz = 0");
+  rejects(SweepExecution{}, [](auto& o) { o.ranks = 2; }, "gather");
 }
 
 TEST_CASE("every public enum round-trips through its names", "[api]") {
@@ -77,11 +90,17 @@ TEST_CASE("every public enum round-trips through its names", "[api]") {
   check_names<CareResult::Status>();
   check_names<TvlqrResult::Status>();
   check_names<TvlqrOptions::NewtonSolver>();
+  check_names<Sensor::Type>();
+  check_names<KalmanResult::Status>();
+  check_names<SampledLoopOptions::Feedback>();
+  check_names<SweepParameter::Name>();
+  check_names<SweepParameter::Kind>();
   check_names<SwitchTimeResult::Status>();
   check_names<SwitchTimeOptions::Refine>();
   check_names<SuppressionResult::Status>();
   check_names<SuppressionPhase>();
   check_names<StudyStatus>();
+  check_names<PlotResult::Status>();
 }
 
 TEST_CASE("enum names are the spellings design files take", "[api][io]") {

@@ -11,27 +11,14 @@
 #include "freeflex/control/metrics.hpp"
 #include "freeflex/model/basis.hpp"
 #include "freeflex/sim/simulate.hpp"
+#include "support/bodies.hpp"
 
 using namespace freeflex;
 
 namespace {
 
-/// The paper's moment example (1 m, 1 kg, EI = 1, NOA 6): the load M_z = ±1 N m at the
-/// centre (0–0.5 s +1, 0.5–1 s −1) drives the nominal maneuver θ0: 0 → 3 rad. Feedback
-/// actuators: a torque at o (element 1) and body-y thrusters at both tips (2, 3).
-FlexibleBody moment_body(int noa) {
-  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
-  return FlexibleBody(beam, noa,
-                      {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                       {"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                       {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
-}
-
-Excitation moment_loads() {
-  return Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt,
-                     std::nullopt}};
-}
+using freeflex_test::moment_body;
+using freeflex_test::moment_loads;
 
 }  // namespace
 

@@ -1,5 +1,5 @@
-// Geometric stiffening (docs/theory.md section 13) checked from first principles: the
-// kinetic energy of eq. 13.4 against the exact kinetic energy of the foreshortened beam
+// Geometric stiffening (docs/theory.md section 14) checked from first principles: the
+// kinetic energy of eq. 14.4 against the exact kinetic energy of the foreshortened beam
 // (third-order difference), the full model's residual against Lagrange's equations of
 // that energy taken numerically, the loads against the virtual work of a force at the
 // shortened point, and the invariants against Noether's theorem.
@@ -28,7 +28,7 @@ FlexibleBody stiff_body(int noa, std::vector<ForceElement> elements = freeflex_t
   return FlexibleBody(Beam(freeflex_test::rich_beam()), noa, std::move(elements), {}, true);
 }
 
-/// Eq. 13.4 written out from the modal integrals (not through FlexibleBody::mass_matrix).
+/// Eq. 14.4 written out from the modal integrals (not through FlexibleBody::mass_matrix).
 double kinetic_energy(const FlexibleBody& body, const Eigen::VectorXd& z, const Eigen::VectorXd& zd) {
   const ModalIntegrals& mi = body.integrals();
   const int n = body.n();
@@ -48,7 +48,7 @@ double kinetic_energy(const FlexibleBody& body, const Eigen::VectorXd& z, const 
 /// its rate by their own inner quadrature), plus the hub.
 double exact_kinetic_energy(const FlexibleBody& body, const Eigen::VectorXd& z, const Eigen::VectorXd& zd) {
   const Beam& beam = body.beam();
-  const AdmissibleBasis& basis = body.basis();
+  const ShapeBasis& basis = body.basis();
   const int n = body.n();
   const Eigen::VectorXd q = z.tail(n), qd = zd.tail(n);
   const Eigen::Matrix2d C = rot(z(2));
@@ -96,7 +96,7 @@ double exact_kinetic_energy(const FlexibleBody& body, const Eigen::VectorXd& z, 
   return T;
 }
 
-/// Lagrange's equations of T (eq. 13.4) + V - G, numerically: ∂T/∂z' by central
+/// Lagrange's equations of T (eq. 14.4) + V - G, numerically: ∂T/∂z' by central
 /// differences in z' (exact for a quadratic form), its time derivative along
 /// z(t) = z + z' t + z'' t²/2 and ∂T/∂z by fourth-order central differences.
 Eigen::VectorXd lagrange_residual(const FlexibleBody& body, const Eigen::VectorXd& z, const Eigen::VectorXd& zd,
@@ -127,7 +127,7 @@ Eigen::VectorXd lagrange_residual(const FlexibleBody& body, const Eigen::VectorX
 
 }  // namespace
 
-TEST_CASE("eq. 13.4 is the kinetic energy of the foreshortened beam to second order", "[dynamics]") {
+TEST_CASE("eq. 14.4 is the kinetic energy of the foreshortened beam to second order", "[dynamics]") {
   const FlexibleBody body = stiff_body(4);
   const int N = body.dofs(), n = body.n();
   std::mt19937 rng(11);
@@ -142,8 +142,8 @@ TEST_CASE("eq. 13.4 is the kinetic energy of the foreshortened beam to second or
       ze.tail(n) *= eps;
       zde.tail(n) *= eps;
       const double d = std::abs(exact_kinetic_energy(body, ze, zde) - kinetic_energy(body, ze, zde));
-      INFO("trial " << trial << " eps " << eps << ": |T_exact - T_13.4| = " << d << ", previous / this " << prev / d);
-      // the terms eq. 13.4 drops are of third and fourth order: halving q, q' divides
+      INFO("trial " << trial << " eps " << eps << ": |T_exact - T_14.4| = " << d << ", previous / this " << prev / d);
+      // the terms eq. 14.4 drops are of third and fourth order: halving q, q' divides
       // the difference by 8 as eps -> 0 (measured 7.0-15; a term of second order would give 4)
       if (prev > 0.0) CHECK(prev / d > 6.5);
       prev = d;
@@ -154,7 +154,7 @@ TEST_CASE("eq. 13.4 is the kinetic energy of the foreshortened beam to second or
   }
 }
 
-TEST_CASE("stiffened residual is Lagrange's equations of eq. 13.4 (numerical Lagrangian)", "[dynamics]") {
+TEST_CASE("stiffened residual is Lagrange's equations of eq. 14.4 (numerical Lagrangian)", "[dynamics]") {
   const FlexibleBody body = stiff_body(6);
   const FullModel full(body);
   const int N = body.dofs();
@@ -211,7 +211,7 @@ TEST_CASE("stiffened loads: the virtual work of a force at the shortened point",
   }
 }
 
-TEST_CASE("stiffened invariants: Noether's momenta of eq. 13.4", "[dynamics]") {
+TEST_CASE("stiffened invariants: Noether's momenta of eq. 14.4", "[dynamics]") {
   // Linear momentum = ∂T/∂R'; angular momentum = ∂T/∂R' · J R + ∂T/∂θ' (the Lagrangian is
   // invariant under R -> C(α) R, θ -> θ + α), each ∂T/∂z' a difference of the quadratic T.
   const FlexibleBody body = stiff_body(6);
@@ -242,7 +242,7 @@ TEST_CASE("stiffened invariants: Noether's momenta of eq. 13.4", "[dynamics]") {
 
 
 TEST_CASE("prescribed motion: the q rows of the full model, and first order gives the same equation", "[dynamics]") {
-  // Under prescribed (R, θ) the q equation of the second-order T is linear in q (eq. 13.10):
+  // Under prescribed (R, θ) the q equation of the second-order T is linear in q (eq. 14.10):
   // the full model's and the first-order model's right-hand sides are the same, except
   // for a thruster that follows the slope (its direction depends on q): left out here.
   const bool stiffening = GENERATE(false, true);

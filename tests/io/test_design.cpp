@@ -41,7 +41,8 @@ TEST_CASE("bad values name key, line, value and allowed range", "[io]") {
   CHECK_THAT(problems_of("[beam]\nlength_m = nan\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n"),
              Contains("line 2: beam.length_m = nan, must be a finite number"));
   CHECK_THAT(problems_of(std::string(kGood) + "noa_typo = 3\n"),
-             Contains("line 8: unknown key 'model.noa_typo' (allowed here: geometric_stiffening, noa)"));
+             Contains("line 8: unknown key 'model.noa_typo' (allowed here: basis, element_order, elements, fe_modes, "
+                      "geometric_stiffening, noa)"));
   CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n[model]\nnoa = 0\n"),
              Contains("line 6: model.noa = 0, must be a whole number in [1, 100]"));
   CHECK_THAT(problems_of("[beam]\nlength_m = 1\nmass_kg = 1\nbending_stiffness_Nm2 = 1\n[model]\nnoa = 101\n"),
@@ -99,14 +100,18 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
   // defaults: modal variables for the first-order model, physical for the full one
   CHECK(d.simulation->options.first_order_variables == SimulationOptions::Variables::Modal);
   CHECK(d.simulation->options.full_variables == SimulationOptions::Variables::Physical);
+  CHECK(d.simulation->error_estimate);  // on by default
   CHECK(d.force_elements().size() == 2);
   const Design swapped = parse_design(kPaperBeam + kLoad +
                                           "[simulation]\nduration_s = 2.0\nfull_model_variables = \"modal\"\n"
-                                          "first_order_variables = \"physical\"\n",
+                                          "first_order_variables = \"physical\"\nerror_estimate = false\n",
                                       "t.toml");
   REQUIRE(swapped.simulation);
   CHECK(swapped.simulation->options.full_variables == SimulationOptions::Variables::Modal);
   CHECK(swapped.simulation->options.first_order_variables == SimulationOptions::Variables::Physical);
+  CHECK_FALSE(swapped.simulation->error_estimate);
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nerror_estimate = 1\n"),
+             Contains("error_estimate"));
 }
 
 TEST_CASE("bad loads and tolerances name key and line", "[io]") {
@@ -173,8 +178,8 @@ TEST_CASE("what the maneuver library checks itself is reported at the design's k
                       "duration_min_s <= duration_max_s"));
   // a weighted objective that weights nothing (line 14)
   CHECK_THAT(problems_of(head + "duration_s = 1.0\nobjective = \"weighted\"\nenergy_weight = 0.0\n"),
-             Contains("line 14: maneuver.energy_weight, time_weight and smooth_weight are all 0, expected at least "
-                      "one > 0"));
+             Contains("line 14: maneuver.energy_weight, time_weight, smooth_weight and vibration_weight are all 0, "
+                      "expected at least one > 0"));
   // a time weight with a fixed duration (line 15)
   CHECK_THAT(problems_of(head + "duration_s = 1.0\nobjective = \"weighted\"\nfree_duration = false\n"
                                 "time_weight = 1.0\n"),
@@ -296,4 +301,33 @@ TEST_CASE("[model] geometric_stiffening and [motion]: keys, defaults and every p
   CHECK_THAT(problems_of(beam + "[simulation]\nduration_s = 1.0\ncompare_stiffening = true\nnonlinear = false\n"
                                 "[motion.theta]\ntype = \"spin_up\"\nfinal_rate_deg_s = 1.0\nramp_time_s = 1.0\n"),
              Contains("compare_stiffening = true needs nonlinear = true"));
+}
+
+TEST_CASE("elastic maneuver keys load and bad values are reported at their keys", "[io]") {
+  const std::string act = "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\nlimit = 2.0\n";  // 5-9
+  const std::string head = kPaperBeam + act + "[maneuver]\nactuators = [\"hub\"]\nduration_s = 1.0\n";  // 10-12
+  const Design d = parse_design(head + "elastic = true\nelastic_modes = 2\nmodes_at_rest = \"all\"\n"
+                                       "zero_end_commands = true\nvibration_weight = 3.0\ntip_deflection_limit_m = 0.05\n",
+                                "t.toml");
+  REQUIRE(d.maneuver);
+  const ManeuverProblem& p = d.maneuver->problem;
+  CHECK(p.elastic);
+  CHECK(p.elastic_modes == 2);
+  CHECK(p.modes_at_rest == ManeuverProblem::all_modes);
+  CHECK(p.zero_end_commands);
+  CHECK(p.w_vibration == 3.0);
+  CHECK(p.tip_deflection_limit_m == 0.05);
+  const Design plain = parse_design(head, "t.toml");
+  CHECK_FALSE(plain.maneuver->problem.elastic);
+  CHECK(plain.maneuver->problem.elastic_modes == ManeuverProblem::all_modes);
+  CHECK_FALSE(plain.maneuver->problem.zero_end_commands);
+  // the paper beam's model.noa is 6 (line 13 / 14)
+  CHECK_THAT(problems_of(head + "elastic = true\nelastic_modes = 7\n"),
+             Contains("line 14: maneuver.elastic_modes = 7, must be"));
+  CHECK_THAT(problems_of(head + "elastic = true\nelastic_modes = 2\nmodes_at_rest = 3\n"),
+             Contains("line 15: maneuver.modes_at_rest = 3, expected at most elastic_modes = 2"));
+  CHECK_THAT(problems_of(head + "elastic_modes = 2\n"), Contains("line 13: maneuver.elastic_modes = 2 needs elastic = true"));
+  CHECK_THAT(problems_of(head + "modes_at_rest = 1\n"), Contains("line 13: maneuver.modes_at_rest = 1 needs elastic = true"));
+  CHECK_THAT(problems_of(head + "elastic = true\ntip_deflection_limit_m = 0\n"),
+             Contains("line 14: maneuver.tip_deflection_limit_m = 0"));
 }

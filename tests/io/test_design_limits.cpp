@@ -166,6 +166,12 @@ TEST_CASE("inputs accepted before but meaningless or fatal later are refused", "
              Contains("line 6: damping.ratios has 7 entries, but the model has 6 elastic modes (model.noa = 6); at "
                       "most 6"));
   CHECK(problems_of(kPaperBeam + "[damping]\nratios = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1]\n").empty());
+  // at most 100 spin rates (each costs two eigenproblems of the model's size)
+  std::string rates = "0.0";
+  for (int i = 1; i < 100; ++i) rates += ", 1.0";
+  CHECK(problems_of(kPaperBeam + "[free_vibration]\nspin_rates_deg_s = [" + rates + "]\n").empty());
+  CHECK_THAT(problems_of(kPaperBeam + "[free_vibration]\nspin_rates_deg_s = [" + rates + ", 2.0]\n"),
+             Contains("line 6: free_vibration.spin_rates_deg_s has 101 entries; at most 100"));
   CHECK_THAT(problems_of(kPaperBeam + replaced(kLoad, "[0.0, 1.0]", "[0.0, 0.0]")),
              Contains("line 9: load[1].direction = [0, 0] has length 0, must have a length in [1e-06, 1e+06]"));
   CHECK_THAT(problems_of(kPaperBeam + replaced(kLoad, "[0.0, 0.5, 1.0]", "[5.0, 6.0, 7.0]") +

@@ -60,27 +60,17 @@ TEST_CASE("compiled N_Vector kernels reproduce SUNDIALS' serial kernels", "[sim]
     N_VScale(-1.5, p.lib[0], p.lib[3]);
     N_VScale(-1.5, p.ours[0], p.ours[3]);
     CHECK(p.same(3));
-    N_VProd(p.lib[0], p.lib[1], p.lib[3]);
-    N_VProd(p.ours[0], p.ours[1], p.ours[3]);
-    CHECK(p.same(3));
+    // weights for the norm below (SUNDIALS' own kernels on both sides: no longer compiled here)
     N_VDiv(p.lib[0], p.lib[1], p.lib[3]);
     N_VDiv(p.ours[0], p.ours[1], p.ours[3]);
-    CHECK(p.same(3));
     N_VAbs(p.lib[3], p.lib[3]);
     N_VAbs(p.ours[3], p.ours[3]);
-    CHECK(p.same(3));
-    N_VInv(p.lib[3], p.lib[2]);
-    N_VInv(p.ours[3], p.ours[2]);
-    CHECK(p.same(2));
-    N_VAddConst(p.lib[2], 0.125, p.lib[2]);
-    N_VAddConst(p.ours[2], 0.125, p.ours[2]);
-    CHECK(p.same(2));
-    CHECK(N_VMaxNorm(p.lib[0]) == N_VMaxNorm(p.ours[0]));
-    CHECK(N_VMin(p.lib[0]) == N_VMin(p.ours[0]));
+    REQUIRE(p.same(3));
     // the only kernel that sums in another order: equal to round-off of an n-term sum
     const double w_lib = N_VWrmsNorm(p.lib[0], p.lib[3]), w_ours = N_VWrmsNorm(p.ours[0], p.ours[3]);
     CHECK(std::abs(w_lib - w_ours) <= 4.0 * n * DBL_EPSILON * w_lib);
-    // fused operations, against SUNDIALS' serial fused kernels
+    // fused operations, against SUNDIALS' serial fused kernels (ours: CVODE's fallback for a
+    // linear combination, N_VScale and N_VLinearSum calls, made with the kernels above)
     double c3[] = {0.5, -1.25, 3.0};
     N_Vector xl[] = {p.lib[0], p.lib[1], p.lib[2]}, xo[] = {p.ours[0], p.ours[1], p.ours[2]};
     N_VEnableFusedOps_Serial(p.lib[3], SUNTRUE);
@@ -93,8 +83,5 @@ TEST_CASE("compiled N_Vector kernels reproduce SUNDIALS' serial kernels", "[sim]
     N_VScaleAddMulti(2, c3, p.ours[0], yo, yo);
     CHECK(p.same(1));
     CHECK(p.same(2));
-    N_VConst(0.75, p.lib[3]);
-    N_VConst(0.75, p.ours[3]);
-    CHECK(p.same(3));
   }
 }

@@ -421,3 +421,26 @@ TEST_CASE("a range check ends the integration with out_of_range at the first out
   CHECK(r.t.size() == 25);  // 0, 0.1, ..., 2.4: the state outside is recorded
   CHECK(std::string(freeflex::to_string(freeflex::IntegrationStatus::OutOfRange)) == "out_of_range");
 }
+
+TEST_CASE("the total step budget stops the whole integration, with the time reached", "[sim][issue20]") {
+  long calls = 0;
+  const OdeSystem sys = oscillator(2.0 * kPi, &calls);
+  const std::vector<double> times = linspace(0.0, 10.0, 101);  // each 0.1 s interval needs far fewer than max_steps
+  IntegratorOptions opt;
+  const auto free = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  REQUIRE(free.ok());
+  REQUIRE(free.steps > 400);
+  opt.max_total_steps = 400;
+  const auto r = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  CHECK_FALSE(r.ok());
+  CHECK_THAT(r.message, Contains("max_total_steps = 400, is spent"));
+  CHECK(r.steps == 400);
+  CHECK(r.failure_time > 0.0);
+  CHECK(r.failure_time < 10.0);
+  // a budget that suffices gives the same bits as none
+  opt.max_total_steps = free.steps;
+  const auto same = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  REQUIRE(same.ok());
+  CHECK(same.steps == free.steps);
+  CHECK(same.x == free.x);
+}

@@ -1,8 +1,11 @@
 #pragma once
 // Test fixtures: beams that exercise every term of the models.
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "freeflex/dynamics/flexible_body.hpp"
+#include "freeflex/model/loads.hpp"
 
 namespace freeflex_test {
 
@@ -24,6 +27,26 @@ inline std::vector<freeflex::ForceElement> rich_elements() {
           {"follower", T::Thruster, 1.1, {0.2, 1.0}, true},
           {"thruster", T::Thruster, 0.1, {-0.5, 0.4}, false},
           {"torque", T::Torque, 0.7, {0.0, 0.0}, false}};
+}
+
+/// The paper's moment example (1 m, 1 kg, EI = 1): the load M_z = ±1 N m at the centre
+/// (0–0.5 s +1, 0.5–1 s −1, moment_loads()) drives the nominal maneuver θ0: 0 → 3 rad.
+/// Feedback actuators: a torque at o (element 1) and body-y thrusters at both tips (2, 3).
+inline freeflex::FlexibleBody moment_body(int noa, std::vector<double> damping_ratios = {}) {
+  using T = freeflex::ForceElement::Type;
+  const freeflex::Beam beam(freeflex::BeamProperties::uniform(1.0, 1.0, 1.0));
+  return freeflex::FlexibleBody(beam, noa,
+                                {{"Mz", T::Torque, 0.5, {0.0, 0.0}, false},
+                                 {"tau", T::Torque, 0.5, {0.0, 0.0}, false},
+                                 {"left", T::Thruster, 0.0, {0.0, 1.0}, false},
+                                 {"right", T::Thruster, 1.0, {0.0, 1.0}, false}},
+                                std::move(damping_ratios));
+}
+
+inline freeflex::Excitation moment_loads() {
+  using freeflex::TimeProfile;
+  return freeflex::Excitation{
+      {TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt, std::nullopt}};
 }
 
 }  // namespace freeflex_test

@@ -327,7 +327,7 @@ TEST_CASE("the collocation trajectory is a consistent RigidTrajectory", "[trajop
     CHECK(traj.t_begin() == 0.0);
     CHECK(traj.t_end() == Approx(3.0).epsilon(1e-14));  // T fixed; Σ σ_k = 1 up to round-off
     CHECK(traj.breakpoints().size() == 29);
-    const RigidDynamics& dyn = traj.dynamics();
+    const RigidDynamics& dyn = traj.dynamics().rigid();
     for (int k = 0; k <= 30; ++k) {  // knots are interpolated exactly
       const RigidState s = traj.at(Instant::at(r.t(k)));
       // Hermite basis at s = 0 or 1 returns the knot values up to round-off

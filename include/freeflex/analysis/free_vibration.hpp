@@ -25,7 +25,7 @@ struct FreeVibrationResult {
 FreeVibrationResult free_vibration(const ModalIntegrals& mi);
 
 /// Elastic frequencies under steady spin Ω about o with the reference frame held (a hub
-/// turning at a constant rate; docs/theory.md eq. 13.12): the eigenvalues ω² of
+/// turning at a constant rate; docs/theory.md eq. 14.12): the eigenvalues ω² of
 /// (K − Ω² (M − G_c), M), ascending; without stiffening, of (K − Ω² M, M) (each mode
 /// then softens as ω² = ω0² − Ω²). A negative ω² is a mode the spin has buckled. `mi`
 /// needs G_c (stiffened_modal_integrals) when `stiffening`. Throws std::invalid_argument
@@ -40,7 +40,7 @@ double paper_lambda(double omega_rad_s, double mass_kg, double length_m, double 
 
 /// Transverse displacement (body y) of a mode at body points x at rest:
 /// Ry + x theta + Phi(x) q, from an eigenvector z = [Rx, Ry, theta, q].
-Eigen::VectorXd mode_displacement(const AdmissibleBasis& basis, const Eigen::VectorXd& z,
+Eigen::VectorXd mode_displacement(const ShapeBasis& basis, const Eigen::VectorXd& z,
                                   const Eigen::VectorXd& x);
 
 }  // namespace freeflex

@@ -11,7 +11,9 @@
 
 #include "freeflex/app/progress.hpp"
 #include "freeflex/app/studies.hpp"
+#include "freeflex/app/sweep.hpp"
 #include "freeflex/io/design.hpp"
+#include "freeflex/io/plot.hpp"
 
 namespace freeflex {
 
@@ -29,10 +31,14 @@ struct RunOptions {
   bool quiet = false;              ///< no progress, tables or warnings on the streams below
   std::ostream* log = nullptr;     ///< progress, tables and the closing line; null: silent
   std::ostream* errors = nullptr;  ///< warnings as they happen; null: silent
+  PlotOptions plot;                ///< the gnuplot run for figures, and its time limit per figure
+  /// [sweep]: threads, MPI share; an empty journal means out_dir/.freeflex-sweep-journal
+  /// (kept until the run's files are committed, so that a killed sweep resumes).
+  SweepExecution sweep;
 };
 
-/// Throws std::invalid_argument for an out_dir no file system accepts; the defaults (no
-/// directory: results only) are valid.
+/// Throws std::invalid_argument for an out_dir no file system accepts or bad plot
+/// options; the defaults (no directory: results only) are valid.
 void validate(const RunOptions& options);
 
 /// Everything a run did: each study's typed result, the files written (summary.json
@@ -47,6 +53,8 @@ struct RunResult {
   std::optional<ManeuverStudyResult> maneuver;
   std::optional<SimulationStudyResult> simulation;
   std::optional<SuppressionStudyResult> suppression;
+  std::optional<LqgStudyResult> lqg;
+  std::optional<SweepStudyResult> sweep;
   std::vector<std::string> files;
   std::vector<std::string> warnings;
 };

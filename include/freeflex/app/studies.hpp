@@ -16,6 +16,7 @@
 #include "freeflex/control/switch_time.hpp"
 #include "freeflex/enum_names.hpp"
 #include "freeflex/io/design.hpp"
+#include "freeflex/trajopt/chattering.hpp"
 #include "freeflex/trajopt/solve.hpp"
 
 namespace freeflex {
@@ -39,11 +40,21 @@ struct StudyLog {
   std::function<void(const std::string&)> warn;  ///< optional; must not throw
 };
 
-/// Elastic natural frequencies of a design's beam with `noa` functions.
+/// Elastic natural frequencies of a design's beam with `noa` functions of its basis and,
+/// if asked, an estimate of each one's error from a refined model (docs/theory.md
+/// section 4b): finite-element basis, Richardson extrapolation from the same model on
+/// twice the elements at the element order's rate (h^4 or h^8); paper's basis, the
+/// change to NOA 2 noa (capped at kMaxNoa; at NOA kMaxNoa, the change from NOA kMaxNoa/2),
+/// which the error of a Ritz estimate is at least.
 struct ModeTable {
   Eigen::VectorXd omega_rad_s, freq_hz, lambda;
+  Eigen::VectorXd error_estimate;  ///< relative (omega - omega_exact) / omega; empty unless asked; NaN where none
+  std::string error_method;        ///< how error_estimate was found, for reports
 };
-ModeTable mode_table(const Design& design, int noa);
+ModeTable mode_table(const Design& design, int noa, bool estimate_error = false);
+/// True when the closed-form free-free beam gives the design's exact frequencies: one
+/// uniform span, no hub, no payload (then no error estimate is needed).
+bool has_exact_modes(const Design& design);
 
 /// [free_vibration]: frequencies over the NOA sweep, mode shapes against the exact beam.
 struct FreeVibrationStudyResult {
@@ -57,8 +68,10 @@ struct FreeVibrationStudyResult {
   struct Frequencies {
     int noa = 0;
     Eigen::VectorXd lambda, omega_rad_s;  ///< the elastic modes reported at this NOA
+    Eigen::VectorXd error_estimate;       ///< relative; empty where the exact beam applies (mode_table)
   };
   std::vector<Frequencies> frequencies;
+  std::string error_method;  ///< how error_estimate was found (empty where the exact beam applies)
   struct ModeShape {
     std::string name;
     int noa = 0, mode = 0;
@@ -83,6 +96,13 @@ struct ManeuverStudyResult {
 
   TrajoptResult trajopt;
   std::optional<FlownManeuver> flown;  ///< when solved: what [simulation] and [controller] fly
+  /// When solved: chattering of the controls (a singular arc), with suggested remedies.
+  ChatteringReport chattering;
+  /// With an elastic maneuver: the rigid counterpart of its problem (trajopt/problem.hpp)
+  /// solved with the same options, for the extra control energy and the suppression
+  /// comparison; and, when that solved, what it flies.
+  std::optional<TrajoptResult> rigid_optimum;
+  std::optional<FlownManeuver> rigid_flown;
 };
 /// `quiet`: no Ipopt log on the log stream (the design's own `quiet` applies too).
 ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const StudyLog& log = {});
@@ -121,6 +141,9 @@ struct SimulationStudyResult {
       std::optional<double> energy_change_J, work_J, energy_balance_error_rel;
     };
     Range range;
+    /// Its global integration error, from a second run at tighter tolerances
+    /// ([simulation] error_estimate; absent when switched off or the run failed).
+    std::optional<GlobalErrorEstimate> error_estimate;
   };
   std::optional<Solution> nonlinear, perturbation;
   /// [simulation] compare_stiffening: the full model with geometric stiffening flipped.
@@ -142,6 +165,9 @@ struct SuppressionStudyResult {
   std::vector<std::string> warnings;
 
   SuppressionResult chain;  ///< nominal motion, open loop, TV-LQR, closed loops
+  /// With a vibration-aware (elastic) maneuver: the same chain about its rigid optimum
+  /// (ManeuverStudyResult::rigid_flown), compared beside it.
+  std::optional<SuppressionResult> rigid_chain;
   /// A bang-bang rotation leaving the first `modes` elastic modes at rest; without
   /// `modes`, the reason none was designed.
   struct BangBang {
@@ -150,8 +176,9 @@ struct SuppressionStudyResult {
     std::optional<SwitchTimeResult> design;
   };
   std::vector<BangBang> bang_bang;
-  /// One response compared in comparison.csv: a case (open_loop, tvlqr, bang_bang_kK) on
-  /// a model (first_order, nonlinear).
+  /// One response compared in comparison.csv: a case (open_loop, tvlqr, bang_bang_kK; with
+  /// a vibration-aware maneuver vibration_aware_open_loop, vibration_aware_tvlqr,
+  /// rigid_optimum_open_loop, rigid_optimum_tvlqr) on a model (first_order, nonlinear).
   struct Case {
     std::string name, model;
     Eigen::VectorXd t;

@@ -84,6 +84,11 @@ struct SuppressionResult {
   ClosedLoopResult closed_loop_full;
 };
 
+/// The maneuver's commands as the nominal commands u0 of the feedback actuators (element
+/// indices `actuators`, which include the maneuver's): zero on the others and once the
+/// maneuver has ended.
+ActuatorCommandFunction maneuver_actuator_commands(const FlownManeuver& maneuver, const std::vector<int>& actuators);
+
 /// Runs the chain. Throws std::invalid_argument (before any work) for sizes that do not
 /// match the body, a horizon or end out of range, weights that are not PSD / PD, or
 /// options out of range; numerical failure ends the chain with its status and reason.

@@ -66,6 +66,8 @@ class BangBangRotation : public RigidTrajectory {
 struct SwitchTimeOptions {
   double rtol = 1e-10;             ///< first-order simulations (Adams)
   double atol = 1e-13;
+  /// Steps of each first-order simulation (IntegratorOptions::max_total_steps); 0: no limit.
+  long max_steps_per_simulation = 0;
   /// On the scaled constraints (each modal one is sqrt(E_j / E_rigid)): 1e-7 leaves
   /// E_j / E_rigid ~ 1e-14.
   double constraint_tolerance = 1e-7;

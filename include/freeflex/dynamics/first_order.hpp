@@ -67,7 +67,7 @@ class FirstOrderModel {
   /// the kept inverse of 𝕄0(0). u1 has input_size() entries (or none: zero).
   const Eigen::VectorXd& rhs(Data& data, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1,
                              const Eigen::Ref<const Eigen::VectorXd>& u1) const;
-  /// Prescribed rigid motion (docs/theory.md eq. 13.10): the nominal trajectory is the
+  /// Prescribed rigid motion (docs/theory.md eq. 14.10): the nominal trajectory is the
   /// motion itself (R1 = θ1 = 0), and only the q rows of eq. 7.1 remain,
   /// M q'' = f_q(q, q'). xq = [q, q'] (2n); returns [q', q''] in data.xq_dot.
   const Eigen::VectorXd& prescribed_rhs(Data& data, const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& xq,

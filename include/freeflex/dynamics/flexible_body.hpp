@@ -3,6 +3,7 @@
 // modal integrals, the configuration-dependent mass matrix, generalized forces of the
 // force elements with their derivatives, and modal damping. The allocation-free forms
 // the simulators' right-hand sides use are private to src/ (dynamics/body_kernels.hpp).
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,20 +16,25 @@ namespace freeflex {
 
 class FlexibleBody {
  public:
-  /// `damping_ratios[i]` damps elastic mode i+1 (modes beyond the list are undamped).
-  /// `geometric_stiffening`: keep the foreshortening of the bent beam to second order in q
-  /// (docs/theory.md section 13: H_bar, G_c and each force element's H(x_a) are computed);
-  /// false is the paper's model (section 6). Throws std::invalid_argument for an element
-  /// off the beam or a negative ratio.
+  /// On the paper's basis of `noa` admissible functions. `damping_ratios[i]` damps
+  /// elastic mode i+1 (modes beyond the list are undamped). `geometric_stiffening`: keep
+  /// the foreshortening of the bent beam to second order in q (docs/theory.md section 14:
+  /// H_bar, G_c and each force element's H(x_a) are computed); false is the paper's model
+  /// (section 6). Throws std::invalid_argument for an element off the beam or a negative
+  /// ratio.
   FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> elements,
                std::vector<double> damping_ratios = {}, bool geometric_stiffening = false);
+  /// On the basis of n functions that `basis` chooses (make_basis); throws as above and
+  /// as make_basis does.
+  FlexibleBody(const Beam& beam, int n, const BasisOptions& basis, std::vector<ForceElement> elements,
+               std::vector<double> damping_ratios = {}, bool geometric_stiffening = false);
 
-  int n() const { return basis_.size(); }       ///< elastic coordinates
-  int dofs() const { return 3 + basis_.size(); } ///< z = [Rx, Ry, theta, q]
+  int n() const { return basis_->size(); }       ///< elastic coordinates
+  int dofs() const { return 3 + basis_->size(); } ///< z = [Rx, Ry, theta, q]
   const Beam& beam() const { return beam_; }
-  const AdmissibleBasis& basis() const { return basis_; }
+  const ShapeBasis& basis() const { return *basis_; }
   const ModalIntegrals& integrals() const { return mi_; }
-  /// True when the model keeps geometric stiffening (section 13).
+  /// True when the model keeps geometric stiffening (section 14).
   bool geometric_stiffening() const { return stiffening_; }
   const std::vector<ForceElement>& elements() const { return elements_; }
   /// Index of the element called `name`, or -1.
@@ -36,7 +42,7 @@ class FlexibleBody {
   /// Body coordinate x of element e.
   double element_x(int e) const { return x_[e]; }
 
-  /// 𝕄(theta, q), eq. 6.1 (eq. 13.5 with geometric stiffening), (3+n) x (3+n).
+  /// 𝕄(theta, q), eq. 6.1 (eq. 14.5 with geometric stiffening), (3+n) x (3+n).
   Eigen::MatrixXd mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
 
   /// A generalized force and its derivative with respect to (theta, q).
@@ -58,7 +64,7 @@ class FlexibleBody {
   /// Basis values Φ(x_e) and slopes Φ'(x_e) at element e (1 x n).
   const Eigen::RowVectorXd& element_phi(int e) const { return phi_[e]; }
   const Eigen::RowVectorXd& element_slope(int e) const { return dphi_[e]; }
-  /// H(x_e) of eq. 13.1 at element e (n x n; empty without geometric stiffening).
+  /// H(x_e) of eq. 14.1 at element e (n x n; empty without geometric stiffening).
   const Eigen::MatrixXd& element_foreshortening(int e) const { return H_[e]; }
 
   /// Modal damping D (eq. 6.5), (3+n) x (3+n); zero when no ratio is set.
@@ -72,7 +78,7 @@ class FlexibleBody {
 
  private:
   Beam beam_;
-  AdmissibleBasis basis_;
+  std::shared_ptr<const ShapeBasis> basis_;  // immutable: copies of the body share it
   ModalIntegrals mi_;
   std::vector<ForceElement> elements_;
   std::vector<double> x_;

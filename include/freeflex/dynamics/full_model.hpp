@@ -39,19 +39,19 @@ class FullModel {
   /// which differs from 𝕄_b(0) only in the (x, θ) entries (−Φ̄ q) and the (θ, θ) entry
   /// (+ qᵀ M q): a symmetric rank-two change. So z'' comes from the inverse of 𝕄_b(0),
   /// formed at construction, and a 2 x 2 Woodbury correction instead of a new
-  /// factorization at every call. With geometric stiffening (eq. 13.5-13.6) the change
+  /// factorization at every call. With geometric stiffening (eq. 14.5-14.6) the change
   /// also touches the (x, q) and (y, θ) entries: a rank-four update, 4 x 4 Woodbury.
   bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
            const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
-  /// Prescribed rigid motion (docs/theory.md eq. 13.10): (R, θ) follow `rigid` (its
+  /// Prescribed rigid motion (docs/theory.md eq. 14.10): (R, θ) follow `rigid` (its
   /// position, rate and acceleration at this instant) and only the q rows of eq. 6.2 /
-  /// 13.6 remain, M q'' = Q − Bᵀ Cᵀ R'' − Φ̃ᵀ θ'' + θ'² (M − G_c) q − K q − D_q z'.
+  /// 14.6 remain, M q'' = Q − Bᵀ Cᵀ R'' − Φ̃ᵀ θ'' + θ'² (M − G_c) q − K q − D_q z'.
   /// xq = [q, q'] (2n); [q', q''] into data.xq_dot. Always true (M is constant).
   bool prescribed_rhs(Data& data, const RigidState& rigid, const Eigen::Ref<const Eigen::VectorXd>& xq,
                       const Eigen::Ref<const Eigen::VectorXd>& commands) const;
   /// The generalized force [F; M_o] that holds (R, θ) on a prescribed motion: the rigid
-  /// rows of the residual at (z, z', z'') with the loads (eq. 13.11).
+  /// rows of the residual at (z, z', z'') with the loads (eq. 14.11).
   Eigen::Vector3d constraint_force(const Eigen::Ref<const Eigen::VectorXd>& z,
                                    const Eigen::Ref<const Eigen::VectorXd>& z_dot,
                                    const Eigen::Ref<const Eigen::VectorXd>& z_ddot,
@@ -69,7 +69,7 @@ class FullModel {
   /// `Mq` is scratch of size n (receives M q).
   void bias(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::Ref<const Eigen::VectorXd>& z_dot,
             Eigen::Ref<Eigen::VectorXd> out, Eigen::Ref<Eigen::VectorXd> Mq) const;
-  /// rhs() of the stiffened model (eq. 13.6).
+  /// rhs() of the stiffened model (eq. 14.6).
   bool rhs_stiffened(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                      const Eigen::Ref<const Eigen::VectorXd>& commands) const;
   const FlexibleBody& body_;

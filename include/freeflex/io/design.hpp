@@ -11,7 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "freeflex/control/lqg.hpp"
 #include "freeflex/control/tvlqr.hpp"
+#include "freeflex/dynamics/flexible_body.hpp"
 #include "freeflex/model/beam.hpp"
 #include "freeflex/model/loads.hpp"
 #include "freeflex/sim/prescribed.hpp"
@@ -20,16 +22,41 @@
 
 namespace freeflex {
 
-/// Limits on what a design may ask for (README "design keys"). They are generous: they
-/// catch typos and absurd magnitudes before any work, and bound every count a design
-/// derives (rows, samples, grid points) so that no run can exhaust memory.
+/// Limits on what a design may ask for (README "design keys", the "(limits)" row). They
+/// are generous: they catch typos and absurd magnitudes before any work, and bound every
+/// count and size a design implies (rows, files, text, sweep entries, mode shapes, the
+/// work of each study) so that no run can exhaust memory or run unbounded.
 namespace design_limits {
 inline constexpr std::size_t kMaxFileBytes = 1 << 20;     ///< a design file: 1 MiB
+inline constexpr std::size_t kMaxTitleBytes = 256;        ///< the title (it reaches every figure)
 inline constexpr double kMaxTime_s = 1e6;                 ///< any time, duration or horizon
 inline constexpr double kMinDuration_s = 1e-6;            ///< any duration or horizon
-inline constexpr double kMaxOutputRows = 200000;          ///< output rows per series, TV-LQR grid points
+inline constexpr double kMaxOutputRows = 200000;          ///< rows of one output series, TV-LQR grid points
 inline constexpr double kMaxTrajectorySamples = 1000000;  ///< samples of the zero-order motion
+inline constexpr int kMaxForceElements = 64;              ///< [[load]] and [[actuator]] tables together
+inline constexpr std::size_t kMaxProfileTimes = 10000;    ///< times_s entries of all load profiles
+inline constexpr int kMaxNoaSweep = 100;                  ///< entries of free_vibration.noa_sweep
+inline constexpr int kMaxModeShapes = 20;                 ///< [[free_vibration.mode_shape]] tables
+inline constexpr int kMaxModeShapePoints = 100000;        ///< points of one mode shape
+inline constexpr double kMaxModeShapeRows = 200000;       ///< points of all mode shapes together
 inline constexpr int kMaxIntervals = 5000;                ///< collocation intervals (trajopt's max_intervals)
+inline constexpr int kMaxMeshRefinements = 20;            ///< mesh-refinement rounds
+inline constexpr long kMaxIterations = 1000000;           ///< Ipopt max_iter (either key)
+/// Ipopt iterations x NLP unknowns, summed over the mesh-refinement rounds (each round's
+/// mesh at most doubles, up to kMaxIntervals): the optimizer's work, 3.2 to 4 µs of CPU
+/// per unit (measured: 20 and 24 iterations on 5000 intervals, 70 007 unknowns: 4.5 s and
+/// 6.7 s), so about 3 min at the bound.
+inline constexpr double kMaxIpoptWork = 4.5e7;
+/// NLP unknowns Ipopt's derivative checker may test: its work grows like n³ for the
+/// first-order test and faster (about n^3.8) for the second-order ones. At these sizes
+/// each takes about 15 s of CPU (docs: README, the "(limits)" row).
+inline constexpr double kMaxDerivativeTestUnknowns = 2000;
+inline constexpr double kMaxSecondOrderTestUnknowns = 400;
+/// Doubles of the TV-LQR's stored gains: grid points x actuators x 2 (3 + noa) (400 MB).
+inline constexpr double kMaxGainStorage = 5e7;
+/// Work of one integration (simulation, comparison run, switch-time simulation): CVODES
+/// steps x max(n², 400), n = 3 + model.noa; integrator_step_budget() turns it into steps.
+inline constexpr double kMaxIntegratorWork = 2e9;
 inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
 inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
 inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;
@@ -94,6 +121,9 @@ struct SimulationStudy {
   SimulationOptions options;
   bool nonlinear = true;
   bool perturbation = true;
+  /// Run every simulation a second time at tolerances 100 times tighter and report the
+  /// difference as the estimate of its global error (GlobalErrorEstimate).
+  bool error_estimate = true;
   std::string rigid_figure = "rigid_motion";
   std::string elastic_figure = "generalized_displacements";
   /// Run the full model a second time with [model] geometric_stiffening flipped
@@ -104,7 +134,7 @@ struct SimulationStudy {
 };
 
 /// [motion]: the reference frame's motion prescribed instead of driven by loads
-/// (docs/theory.md section 13, eq. 13.10): θ(t) and the hub centre's x(t), y(t), each at rest,
+/// (docs/theory.md section 14, eq. 14.10): θ(t) and the hub centre's x(t), y(t), each at rest,
 /// a spin-up ramp or a table with rates and accelerations; o at hub_radius_m from the
 /// centre along the body x axis. With o at an end of the beam: a clamped appendage.
 struct MotionSpec {
@@ -144,13 +174,52 @@ struct BangBangStudy {
   std::vector<int> modes = {1, 2};  ///< distinct k values, each in [0, 4] and at most the modes the actuator excites
 };
 
+/// [lqg]: the [controller]'s TV-LQR flown as a sampled-data (digital) controller on the
+/// full model, with the exact state and with the Kalman filter of the [[sensor]]s (LQG).
+struct LqgStudy {
+  double sample_rate_hz = 1000.0;        ///< sensors and controller
+  Eigen::VectorXd process_noise_density; ///< per controller actuator [N/√Hz or N m/√Hz]
+  double initial_std = 1e-3;             ///< the filter's P0 = initial_std² I
+  PlantOptions plant;                    ///< actuator gain, lag, delay, noise seed
+  bool delay_known = false;              ///< the controller predicts over the delay
+  std::string table = "lqg";             ///< TABLE.csv: one row per case
+  std::string figure = "lqg";
+};
+
+/// One uncertain parameter of a [sweep] ([sweep.NAME]).
+struct SweepParameter {
+  enum class Name { BendingStiffnessScale, MassScale, DampingRatio, ActuatorGain, DelayS, LagS };
+  enum class Kind { Uniform, Normal, Grid };
+  Name name = Name::BendingStiffnessScale;
+  Kind kind = Kind::Uniform;
+  double a = 0.0, b = 0.0;  ///< uniform and grid: [min, max]; normal: mean, std
+  int points = 1;           ///< grid
+};
+
+/// [sweep]: the [controller]'s TV-LQR (or LQG with [lqg]) designed once on the nominal
+/// model and flown on every sample of the uncertain parameters with the full model.
+struct SweepStudy {
+  int samples = 100;          ///< per grid point
+  std::uint64_t seed = 1;     ///< parameters and noise of sample i come from (seed, i)
+  SampledLoopOptions::Feedback feedback = SampledLoopOptions::Feedback::FullState;
+  double sample_rate_hz = 1000.0;
+  double requirement_energy_J = 0.0;  ///< a sample meets it when its residual vibration energy is <= this
+  std::vector<SweepParameter> parameters;
+  std::string table = "sweep";             ///< TABLE.csv: one row per sample
+  std::string figure = "sweep_histogram";  ///< histogram of log10 residual energy
+  /// Total samples: samples times the product of the grid sizes.
+  long total_samples() const;
+};
+
 struct Design {
   std::string source;  ///< file name, for messages
+  std::uint64_t digest = 0;  ///< FNV-1a of the file's text (a resumed sweep checks it)
   std::string title;
   BeamProperties beam;
-  int noa = 6;         ///< [model] number of admissible functions
+  int noa = 6;         ///< [model] number of shape functions (elastic coordinates)
+  BasisOptions basis;  ///< [model] which basis: the paper's (default) or finite-element modes
   /// [model] geometric_stiffening: keep the foreshortening of the bent beam (docs/theory.md
-  /// section 13). On unless a design says otherwise: the paper's model is linear-elastic
+  /// section 14). On unless a design says otherwise: the paper's model is linear-elastic
   /// in the floating frame and fails on spinning structures (Kane, Ryan and Banerjee).
   bool geometric_stiffening = true;
   std::optional<MotionSpec> motion;  ///< [motion]: prescribed reference motion
@@ -163,17 +232,47 @@ struct Design {
   std::optional<ManeuverStudy> maneuver;
   std::optional<ControllerStudy> controller;
   std::optional<BangBangStudy> bang_bang;
+  std::vector<Sensor> sensors;  ///< [[sensor]]
+  std::optional<LqgStudy> lqg;
+  std::optional<SweepStudy> sweep;
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;
   /// The loads' profiles in that order (actuators have none).
   Excitation excitation() const;
+  /// The discretized body every model of the design is built on: the beam on the design's
+  /// basis with `noa` functions, its force elements and damping.
+  FlexibleBody body() const;
 };
+
+/// CVODES steps one integration may take at model.noa = `noa` (kMaxIntegratorWork).
+long integrator_step_budget(int noa);
 
 /// Reads and validates a design file. Throws DesignError (bad content, unreadable file,
 /// not a regular file, larger than design_limits::kMaxFileBytes).
 Design load_design(const std::string& path);
 /// Same, from text; `source` names it in messages.
 Design parse_design(const std::string& text, const std::string& source);
+
+template <>
+struct EnumNames<SweepParameter::Name> {
+  static constexpr const char* what = "sweep parameter";
+  static constexpr std::array<std::pair<SweepParameter::Name, const char*>, 6> names{
+      {{SweepParameter::Name::BendingStiffnessScale, "bending_stiffness_scale"},
+       {SweepParameter::Name::MassScale, "mass_scale"},
+       {SweepParameter::Name::DampingRatio, "damping_ratio"},
+       {SweepParameter::Name::ActuatorGain, "actuator_gain"},
+       {SweepParameter::Name::DelayS, "delay_s"},
+       {SweepParameter::Name::LagS, "lag_s"}}};
+};
+
+template <>
+struct EnumNames<SweepParameter::Kind> {
+  static constexpr const char* what = "distribution";
+  static constexpr std::array<std::pair<SweepParameter::Kind, const char*>, 3> names{
+      {{SweepParameter::Kind::Uniform, "uniform"},
+       {SweepParameter::Kind::Normal, "normal"},
+       {SweepParameter::Kind::Grid, "grid"}}};
+};
 
 }  // namespace freeflex

@@ -1,8 +1,15 @@
 #pragma once
 // Figures through gnuplot: a script is written beside the data (users can restyle and
 // re-run it) and gnuplot renders the PNG to a temporary name that is then renamed.
+// gnuplot runs without a shell, under a time limit (PlotOptions); the text a script
+// carries (titles, labels) is bounded and stripped of control characters.
+#include <array>
+#include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "freeflex/enum_names.hpp"
 
 namespace freeflex {
 
@@ -28,8 +35,48 @@ struct PlotSpec {
   int height_px = 0;  ///< 0: 300 px per panel plus a header
 };
 
-/// Writes DIR/NAME.gp and renders DIR/NAME.png. Returns "" on success, otherwise the
-/// reason (gnuplot missing or failed); the data files are left as they are.
-std::string render_plot(const PlotSpec& spec, const std::string& dir);
+/// Bytes of one text (title, label, series title) a figure script carries; longer texts
+/// are cut (at a character boundary, ending in "..."). Control characters become blanks
+/// and invalid UTF-8 becomes '?': gnuplot's text layout is slow on them (a 41 KB title of
+/// tabs took minutes).
+inline constexpr std::size_t kMaxFigureTextBytes = 512;
+
+/// The gnuplot found when freeflex was built ("" if none was).
+std::string built_in_gnuplot();
+
+/// How figures are rendered.
+struct PlotOptions {
+  std::string gnuplot = built_in_gnuplot();  ///< path of the program run; "": no PNG is drawn
+  double timeout_s = 30.0;                   ///< wall time per figure; then gnuplot's process group is killed
+};
+
+/// Throws std::invalid_argument unless timeout_s is in (0, 3600] and gnuplot has no NUL
+/// character; the defaults are valid.
+void validate(const PlotOptions& options);
+
+struct PlotResult {
+  /// drawn; no_gnuplot: none to run; failed: gnuplot could not start or reported an error;
+  /// timed_out: stopped at PlotOptions::timeout_s.
+  enum class Status { Drawn, NoGnuplot, Failed, TimedOut };
+  Status status = Status::Failed;
+  std::string message;  ///< why no PNG was drawn ("" when drawn)
+  double seconds = 0;   ///< gnuplot's wall time
+  bool ok() const { return status == Status::Drawn; }
+};
+
+template <>
+struct EnumNames<PlotResult::Status> {
+  static constexpr const char* what = "plot status";
+  static constexpr std::array<std::pair<PlotResult::Status, const char*>, 4> names{
+      {{PlotResult::Status::Drawn, "drawn"},
+       {PlotResult::Status::NoGnuplot, "no_gnuplot"},
+       {PlotResult::Status::Failed, "failed"},
+       {PlotResult::Status::TimedOut, "timed_out"}}};
+};
+
+/// Writes DIR/NAME.gp and renders DIR/NAME.png with `options.gnuplot`. The data files are
+/// left as they are whatever happens; a PNG is either whole or absent. Throws IoError when
+/// the script cannot be written.
+PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotOptions& options = {});
 
 }  // namespace freeflex

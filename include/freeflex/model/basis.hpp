@@ -1,15 +1,24 @@
 #pragma once
-// The paper's admissible functions (docs/theory.md section 2): each half of the beam,
-// of length a_left or a_right, is a cantilever clamped at o. With psi_k the k-th
-// cantilever mode on [0, a] (tip value +-2, integral of psi_k^2 equal to a),
-//   phi_{2k-1}(x) = psi_k(|x|)            (symmetric about o)
-//   phi_{2k}(x)   = sign(x) psi_k(|x|)    (antisymmetric about o)
-// so phi(0) = phi'(0) = 0 and rigid motion lives in (R, theta) alone. With o at an end of
-// the beam (one half of zero length: a cantilever clamped at o), the functions are the
-// other half's cantilever modes in order, phi_k(x) = psi_k(|x|), k = 1..n.
+// The paper's admissible functions (docs/theory.md section 2): each side of o, of length
+// a_left or a_right, is a cantilever clamped at o. With psi_k the k-th cantilever mode on
+// [0, a] (tip value +-2, integral of psi_k^2 equal to a):
+//  * equal sides (o at the centre), the paper's pairs
+//      phi_{2k-1}(x) = psi_k(|x|)            (symmetric about o)
+//      phi_{2k}(x)   = sign(x) psi_k(|x|)    (antisymmetric about o);
+//  * unequal sides, one-sided functions (psi_k on one side, zero on the other) taken in
+//    ascending order of their wavenumber lambda_k / a_side, so that both sides are
+//    resolved alike and a short side gets functions only when its wavenumber is reached
+//    (eq. 2.4; the pairs mix a very stiff short-side function into every long-side one).
+//    With o at an end (one side of zero length: a cantilever clamped at o) that order
+//    gives the other side's cantilever modes in order, phi_k(x) = psi_k(|x|), k = 1..n.
+// Either way phi(0) = phi'(0) = 0 and rigid motion lives in (R, theta) alone, and the
+// first n functions for n + 1 are the functions for n (nested Ritz spaces).
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
+
+#include "freeflex/model/shape_basis.hpp"
 
 namespace freeflex {
 
@@ -36,37 +45,44 @@ struct CantileverConstants {
 };
 CantileverMode cantilever_mode(int k, double z);
 
-/// Values of all n functions at one body coordinate x.
-struct BasisValues {
-  Eigen::RowVectorXd phi;    ///< Phi(x), 1 x n
-  Eigen::RowVectorXd dphi;   ///< Phi'(x)
-  Eigen::RowVectorXd ddphi;  ///< Phi''(x); at x = 0 the right-hand limit
-};
-
-class AdmissibleBasis {
+class AdmissibleBasis : public ShapeBasis {
  public:
-  /// n functions on [-a_left, a_right]. One half-length may be zero (o at that end: the
-  /// other half's cantilever modes only). Throws std::invalid_argument if n is outside
-  /// [1, kMaxNoa], a half-length is negative or not finite, or both are zero.
+  /// n functions on [-a_left, a_right]. One side's length may be zero (o at that end:
+  /// the other side's cantilever modes only). Throws std::invalid_argument if n is outside
+  /// [1, kMaxNoa], a side's length is negative or not finite, or both are zero.
   AdmissibleBasis(int n, double a_left, double a_right);
 
-  int size() const { return n_; }
+  int size() const override { return n_; }
   double a_left() const { return a_left_; }
   double a_right() const { return a_right_; }
-  /// True when o is at an end (one half of zero length).
+  /// True when o is at an end (one side of zero length).
   bool one_sided() const { return a_left_ == 0.0 || a_right_ == 0.0; }
-  /// Largest wavenumber lambda_k / a over both halves (sets quadrature density).
+  /// Whether the sides count as equal (relative difference <= 1e-12): the paper's pairs.
+  bool symmetric_pairs() const { return symmetric_; }
+  /// Largest wavenumber lambda_k / a_side among the functions (sets quadrature density).
   double max_wavenumber() const;
+  /// Functions on the left and on the right side of o (pairs count on both).
+  int functions_left() const;
+  int functions_right() const;
 
-  BasisValues evaluate(double x) const;
-  Eigen::RowVectorXd value(double x) const { return evaluate(x).phi; }
-  Eigen::RowVectorXd slope(double x) const { return evaluate(x).dphi; }
-  Eigen::RowVectorXd curvature(double x) const { return evaluate(x).ddphi; }
+  BasisValues evaluate(double x) const override;
+  /// {0}: the curvature of antisymmetric and one-sided functions jumps at o.
+  std::vector<double> cuts() const override { return {0.0}; }
+  /// 2.5 / max_wavenumber(): 20-point Gauss then resolves products to round-off.
+  double max_panel_width() const override { return 2.5 / max_wavenumber(); }
+  std::string name() const override { return "paper"; }
 
  private:
+  enum class Shape { Symmetric, Antisymmetric, Left, Right };
+  struct Function {
+    Shape shape;
+    int k;  // cantilever index - 1, into modes_
+  };
   int n_;
   double a_left_, a_right_;
-  std::vector<CantileverConstants> modes_;  // one per cantilever index k = 1..ceil(n/2) (1..n one-sided)
+  bool symmetric_;
+  std::vector<Function> functions_;
+  std::vector<CantileverConstants> modes_;  // cantilever indices k = 1..largest used
 };
 
 }  // namespace freeflex

@@ -1,5 +1,6 @@
 #pragma once
-// The beam: geometry, piecewise-constant mass and stiffness, hub and point masses.
+// The beam: geometry, mass and stiffness per segment (constant, or varying linearly along
+// a tapered segment), hub and point masses.
 //
 // Conventions (docs/theory.md section 1): SI units throughout. Positions given by a
 // user are distances `s` from the beam's left end, 0 <= s <= L. The body frame has its
@@ -10,11 +11,20 @@
 
 namespace freeflex {
 
-/// One piece of constant properties; pieces are laid end to end from the left end.
+/// One piece of the beam; pieces are laid end to end from the left end. The mass per
+/// length and the stiffness are the values at the piece's left end; given an end value,
+/// they vary linearly to it along the piece (a tapered piece), otherwise they are constant.
 struct BeamSegment {
   double length_m = 0.0;
   double mass_per_length_kg_m = 0.0;
   double bending_stiffness_Nm2 = 0.0;
+  std::optional<double> mass_per_length_end_kg_m = std::nullopt;   ///< at the piece's right end
+  std::optional<double> bending_stiffness_end_Nm2 = std::nullopt;  ///< at the piece's right end
+
+  double mass_per_length_end() const { return mass_per_length_end_kg_m.value_or(mass_per_length_kg_m); }
+  double bending_stiffness_end() const { return bending_stiffness_end_Nm2.value_or(bending_stiffness_Nm2); }
+  bool tapered() const { return mass_per_length_end_kg_m.has_value() || bending_stiffness_end_Nm2.has_value(); }
+  double mass() const { return 0.5 * (mass_per_length_kg_m + mass_per_length_end()) * length_m; }
 };
 
 /// A concentrated mass (a payload) at distance s from the left end.
@@ -52,18 +62,23 @@ class Beam {
   double x_right() const { return length_ - s_o_; }
   /// Body coordinate of a distance s from the left end.
   double x_of(double s) const { return s - s_o_; }
-  /// Distributed mass and stiffness at body coordinate x (right-continuous).
+  /// Distributed mass and stiffness at body coordinate x (right-continuous; linear along a
+  /// tapered segment).
   double mass_per_length(double x) const;
   double bending_stiffness(double x) const;
   /// Body coordinates of the ends and of every segment junction, ascending.
   std::vector<double> breakpoints_x() const;
+  /// Whether any segment is tapered.
+  bool tapered() const;
   /// Distributed mass only (no hub or point masses).
   double distributed_mass() const;
   /// Length-weighted mean EI, used for the non-dimensional frequency lambda.
   double mean_bending_stiffness() const;
 
  private:
-  const BeamSegment& segment_at(double x) const;
+  /// Segment containing body coordinate x (right-continuous) and, if t is given, the
+  /// fraction of its length at which x lies.
+  const BeamSegment& segment_at(double x, double* t = nullptr) const;
   BeamProperties props_;
   double length_ = 0.0;
   double s_o_ = 0.0;

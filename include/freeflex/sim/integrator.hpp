@@ -62,7 +62,11 @@ struct IntegratorOptions {
   /// of energy); BDF suits stiff cases (many functions, heavy damping).
   enum class Method { Bdf, Adams } method = Method::Adams;
   double max_step = 0.0;       ///< 0: no limit [s]
-  long max_steps = 1000000;    ///< per piece; exceeding it is a failure
+  long max_steps = 1000000;    ///< per output interval (one CVode call); exceeding it is a failure
+  /// Steps of the whole integration (every piece and output interval); 0: no limit.
+  /// Spending it is a failure whose message gives the time reached (a work budget: design
+  /// files set one from design_limits so that no simulation runs unbounded).
+  long max_total_steps = 0;
   int max_order = 0;           ///< 0: CVODE's default (BDF 5, Adams 12)
   /// Optional: called with each output time once the state there is recorded (for
   /// progress reports on long runs); must not throw.

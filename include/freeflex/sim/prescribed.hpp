@@ -1,5 +1,5 @@
 #pragma once
-// Prescribed rigid motion (docs/theory.md section 13, eq. 13.10): the reference frame's motion
+// Prescribed rigid motion (docs/theory.md section 14, eq. 14.10): the reference frame's motion
 // R(t), θ(t) is given with its first two derivatives instead of being driven by loads,
 // and the simulations compute the elastic response to it with the full and the
 // first-order models (the q rows of eq. 6.2 / 7.1 alone). A beam clamped at o to a hub

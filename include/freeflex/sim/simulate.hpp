@@ -91,6 +91,34 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
                                                std::shared_ptr<const RigidTrajectory> nominal,
                                                const SimulationOptions& options);
 
+/// An estimate of a simulation's global (accumulated) integration error, from a second
+/// run of the same model with tighter tolerances (docs/theory.md section 8): the largest
+/// difference over the common output times, per group of coordinates. When the error
+/// falls in proportion to the tolerance, the difference is (1 - 1/kErrorEstimateFactor)
+/// of the first run's error (90%); when it falls as its square root, 68%.
+struct GlobalErrorEstimate {
+  bool available = false;  ///< false: the second run failed (see message) or was not made
+  std::string message;     ///< why it is not available
+  double rtol = 0.0, atol = 0.0;  ///< of the second run
+  double R_m = 0.0;        ///< max |ΔRx|, |ΔRy|
+  double theta_rad = 0.0;  ///< max |Δθ|
+  double q = 0.0;          ///< max |Δq_i|
+  double rates = 0.0;      ///< max over every rate (m/s, rad/s, 1/s)
+  double worst_time_s = 0.0;  ///< where the largest of R, θ and q differences is
+  long rhs_evaluations = 0;   ///< of the second run
+  double wall_time_s = 0.0;   ///< of the second run
+};
+
+/// The second run's tolerances divide the first's by this factor.
+inline constexpr double kErrorEstimateFactor = 10.0;
+/// The tolerances of the second run: rtol and atol over kErrorEstimateFactor, rtol not
+/// below 1e-14 (CVODES's error test needs some room above the unit round-off); no progress.
+SimulationOptions error_reference_options(const SimulationOptions& options);
+/// The estimate from a run and the second run over the same output times (`reference`
+/// made with error_reference_options(options)). Not available when either failed.
+GlobalErrorEstimate compare_runs(const SimulationResult& run, const SimulationResult& reference,
+                                 const SimulationOptions& reference_options);
+
 template <>
 struct EnumNames<SimulationOptions::Variables> {
   static constexpr const char* what = "integration variables";

@@ -5,8 +5,9 @@
 //
 // Mesh: N intervals of length h_k = σ_k T (mesh fractions σ_k > 0, Σ σ_k = 1).
 //
-// Decision vector w (nz = 6 + nu values per point, points in time order):
-//   w = [z_0, z_1, ..., z_{P-1}, v_0, ..., v_{N-1}, T],   z_j = [x_j (6), u_j (nu)]
+// Decision vector w (nz = nx + nu values per point, points in time order; nx = 6 for the
+// rigid plant, 6 + 4 + 2n with the elastic part, see trajopt/maneuver_dynamics.hpp):
+//   w = [z_0, z_1, ..., z_{P-1}, v_0, ..., v_{N-1}, T],   z_j = [x_j (nx), u_j (nu)]
 //   Trapezoidal:      P = N + 1, point j is knot j; no v.
 //   Hermite–Simpson:  P = 2N + 1, point 2k is knot k, point 2k+1 the midpoint of interval
 //                     k (separated form); no v.
@@ -16,20 +17,28 @@
 //
 // Constraints g(w), in this order:
 //   for each interval k = 0..N-1 (a = its first knot, b = its last, c = its midpoint):
-//     Trapezoidal:  x_b − x_a − h_k/2 (f_a + f_b)                        (6 rows)
-//     HS:           x_c − (x_a + x_b)/2 − h_k/8 (f_a − f_b)   interpolation (6 rows)
-//                   x_b − x_a − h_k/6 (f_a + 4 f_c + f_b)     Simpson       (6 rows)
+//     Trapezoidal:  x_b − x_a − h_k/2 (f_a + f_b)                        (nx rows)
+//     HS:           x_c − (x_a + x_b)/2 − h_k/8 (f_a − f_b)   interpolation (nx rows)
+//                   x_b − x_a − h_k/6 (f_a + 4 f_c + f_b)     Simpson       (nx rows)
 //     HS compressed: the Simpson rows only, f_c = f(x_c(x_a, x_b, u_a, u_b, T), u_c)
 //   all = 0. Then, if problem.du_max, per interval and actuator (skipping infinite bounds):
 //     Trapezoidal:  e = u_b − u_a                                      (h u' on the piece)
 //     HS:           e0 = −3u_a + 4u_c − u_b,  e1 = u_a − 4u_c + 3u_b   (h u' at both ends)
 //     fixed T: one row per e with bounds ±du_max h_k; free T: two linear rows,
 //     e − du_max σ_k T <= 0 and e + du_max σ_k T >= 0.
-// Variable bounds: x_0 = x_initial and x_{P-1} = x_final (fixed), interior states in
-// [x_min, x_max], controls in [u_min, u_max] at every point, T in [t_min_s, t_max_s].
+//   Then (HS forms) per interval and actuator with a finite limit, the middle Bernstein
+//     coefficient of the quadratic control, 2u_c − (u_a + u_b)/2 in [u_min, u_max]: with
+//     u_a, u_b bounded too, the whole quadratic lies within the bounds (docs/theory.md).
+//   Then, with the elastic part: per point after the first (compressed: knots), the tip
+//     deflections Φ(x_left) q_j and Φ(x_right) q_j in ±tip_deflection_limit_m; then per
+//     targeted mode j, ω_j η_j(T) = 0 and η_j'(T) = 0 (η = modal_rows q).
+// Variable bounds: x_0 = x_initial and x_{P-1} = x_final (fixed; the elastic part of x_0
+// is 0 and of x_{P-1} free), interior rigid states in [x_min, x_max], controls in
+// [u_min, u_max] at every point, T in [t_min_s, t_max_s].
 //
 // Objective, by the transcription's quadrature (Trapezoid / Simpson weights q_j):
 //   w_energy T Σ_j q̄_j Σ_k W_k u_jk²  +  w_time T  +  w_smooth Σ_k (1/h_k) Σ_act e_kᵀ M e_k
+//   + w_vibration ½ (q'ᵀ M_c q' + qᵀ K q) at the last point
 // where the smoothness term is the exact ∫ u'² dt of the piecewise linear / quadratic
 // control.
 //
@@ -43,7 +52,7 @@
 #include <Eigen/Dense>
 
 #include "freeflex/trajopt/problem.hpp"
-#include "freeflex/trajopt/rigid_dynamics.hpp"
+#include "freeflex/trajopt/maneuver_dynamics.hpp"
 #include "freeflex/trajopt/trajectory.hpp"
 
 namespace freeflex {
@@ -60,12 +69,12 @@ class CollocationNlp {
     struct Cache {
       Eigen::VectorXd w;  // the w that f (and J when jac_valid) describe
       bool f_valid = false, jac_valid = false;
-      Eigen::MatrixXd f;             // 6 x P, f at the points
-      Eigen::MatrixXd J;             // 6 x (nz P)
-      Eigen::MatrixXd xc, fc, Jc;    // HS compressed: 6 x N, 6 x N, 6 x (nz N)
-      Eigen::MatrixXd lam_eff, nu_eff;  // 6 x P
-      Eigen::MatrixXd D, Y, B;          // HS compressed: 6 x q, nz x q, q x q
-      RigidDynamics::Data dyn;
+      Eigen::MatrixXd f;             // nx x P, f at the points
+      Eigen::MatrixXd J;             // nx x (nz P)
+      Eigen::MatrixXd xc, fc, Jc;    // HS compressed: nx x N, nx x N, nx x (nz N)
+      Eigen::MatrixXd lam_eff, nu_eff;  // nx x P
+      Eigen::MatrixXd D, Y, B;          // HS compressed: nx x q, nz x q, q x q
+      ManeuverDynamics::Data dyn;
     } cache;
   };
 
@@ -74,7 +83,7 @@ class CollocationNlp {
     Eigen::VectorXd w_lower, w_upper, g_lower, g_upper;
   };
 
-  /// Midpoint states and controls of every interval (HS forms), N x 6 and N x nu.
+  /// Midpoint states and controls of every interval (HS forms), N x nx and N x nu.
   struct Midpoints {
     Eigen::MatrixXd x, u;
   };
@@ -85,7 +94,11 @@ class CollocationNlp {
   CollocationNlp(const FlexibleBody& body, const ManeuverProblem& problem, Transcription transcription,
                  std::vector<double> mesh_fractions);
 
-  const RigidDynamics& dynamics() const { return dyn_; }
+  const ManeuverDynamics& dynamics() const { return dyn_; }
+  /// nx: 6, or 6 + 4 + 2n with the elastic part.
+  int state_size() const { return nx_; }
+  /// The targeted modes (indices into dynamics().elastic()->mode_frequencies()).
+  const std::vector<int>& modes_at_rest() const { return rest_modes_; }
   const ManeuverProblem& problem() const { return problem_; }
   Transcription transcription() const { return tr_; }
   int intervals() const { return static_cast<int>(sigma_.size()); }
@@ -100,7 +113,7 @@ class CollocationNlp {
   int time_index() const { return free_time() ? n_ - 1 : -1; }
   /// t_j / T for point j.
   double point_fraction(int j) const { return tau_[j]; }
-  /// Index of x_j(0) in w; u_j starts 6 further.
+  /// Index of x_j(0) in w; u_j starts nx further.
   int point_offset(int j) const { return j * nz_; }
   /// True for points that are knots (all but the separated form's odd points).
   bool is_knot(int j) const { return tr_ != Transcription::HermiteSimpson || j % 2 == 0; }
@@ -135,6 +148,9 @@ class CollocationNlp {
   const Eigen::VectorXd& hessian_values(Data& data, const Eigen::Ref<const Eigen::VectorXd>& w, double obj_factor,
                                         const Eigen::Ref<const Eigen::VectorXd>& lambda) const;
 
+  /// E_vib at the last point (eq. 6.8) of w; 0 without the elastic part.
+  double terminal_vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& w) const;
+
   /// max |defect| over all collocation rows (interpolation rows included).
   double max_defect(const Eigen::Ref<const Eigen::VectorXd>& w) const;
 
@@ -153,10 +169,11 @@ class CollocationNlp {
     int interval, row;
     std::vector<Term> terms;
   };
-  struct RateRow {
-    int row, actuator;
-    std::vector<std::pair<int, double>> coef;  // (index of u(0) of a control point, coefficient)
-    double time_coef;                          // coefficient on T (free time only)
+  struct LinearRow {  // Σ coef w + time_coef T in [lower, upper]
+    int row;
+    std::vector<std::pair<int, double>> coef;  // (index in w, coefficient)
+    bool timed;                                // has a T column (free time only)
+    double time_coef;
     double lower, upper;
   };
   struct CtrlPoint {  // a place where controls are decision variables
@@ -169,11 +186,14 @@ class CollocationNlp {
   void build_layout();
   void build_defect_rows();
   void build_rate_rows();
+  void build_linear_rows();  // Bernstein, tip deflection and terminal rows
   void build_jacobian_structure();
   void build_hessian_structure();
   void build_compressed_hessian_structure(const std::function<int(int, int)>& slot);
 
   double T_of(const Eigen::Ref<const Eigen::VectorXd>& w) const;
+  int vib_q_index() const;   // q(0) of the last point in w
+  int vib_qd_index() const;  // q'(0) of the last point in w
   void check_size(const Eigen::Ref<const Eigen::VectorXd>& w) const;
   void ensure_f(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w) const;
   void ensure_jac(Data::Cache& c, const Eigen::Ref<const Eigen::VectorXd>& w) const;
@@ -187,17 +207,18 @@ class CollocationNlp {
   double smooth_quadratic(const Eigen::Ref<const Eigen::VectorXd>& w, int interval) const;
   void compressed_jacobian_block(Data::Cache& c, int k, double T) const;  // fills c.D for interval k
 
-  RigidDynamics dyn_;
+  ManeuverDynamics dyn_;
   ManeuverProblem problem_;
   Transcription tr_;
   std::vector<double> sigma_;
-  int nu_ = 0, nz_ = 0, P_ = 0, n_ = 0, m_ = 0, m_defect_ = 0;
+  int nx_ = 6, nu_ = 0, nz_ = 0, P_ = 0, n_ = 0, m_ = 0, m_defect_ = 0;
+  std::vector<int> rest_modes_;
   std::vector<double> tau_, tau_mid_;  // point and midpoint time fractions
   std::vector<CtrlPoint> ctrl_;
   Eigen::VectorXd W_;               // energy weights
   Eigen::MatrixXd Msmooth_;         // 2x2 or 3x3 smoothness form per interval and actuator
   std::vector<Block> blocks_;       // trapezoidal and separated HS
-  std::vector<RateRow> rates_;
+  std::vector<LinearRow> rates_;  // rate rows, then the other linear rows
 
   // Jacobian: per (block, term) the pattern kind and first value index.
   std::vector<std::pair<int, int>> pat_[3];  // 0: identity only, 1: f only, 2: both
@@ -220,6 +241,8 @@ class CollocationNlp {
   std::vector<std::vector<int>> dense_slots_;   // HS compressed: [interval], pairs of dense_act_
   std::vector<std::vector<int>> denseT_slots_;  // HS compressed: [interval], (T, dense_trow_), (T, T)
   int TT_slot_ = -1;
+  std::vector<int> vib_slots_;               // lower triangles of the q and q' blocks at the last point
+  std::vector<std::pair<int, int>> vib_ij_;  // their (i, j) in the K / M_c block; i < n: q, else q' (− n)
   std::vector<int> fcols_;  // columns of z on which f depends
 };
 

@@ -4,8 +4,9 @@
 // radians throughout: commands in N (forces, thrusters) or N m (torques), times in s.
 //
 // The plant is the zero-order (rigid) model, docs/theory.md eq. 6.3, see
-// trajopt/rigid_dynamics.hpp. The cost is
-//   J = w_energy ∫ Σ_k W_k u_k² dt + w_time T + w_smooth ∫ Σ_k u_k'² dt
+// trajopt/rigid_dynamics.hpp, and with `elastic` also the first-order elastic motion
+// about it (trajopt/elastic_dynamics.hpp). The cost is
+//   J = w_energy ∫ Σ_k W_k u_k² dt + w_time T + w_smooth ∫ Σ_k u_k'² dt + w_vibration E_vib(T)
 // over t in [0, T], T fixed (duration_s) or free in [t_min_s, t_max_s].
 #include <functional>
 #include <limits>
@@ -55,6 +56,27 @@ struct ManeuverProblem {
   double w_smooth = 0.0;
   /// Diagonal W of the energy term, one entry >= 0 per actuator; empty means all ones.
   Eigen::VectorXd energy_weights;
+  /// Commands start and end at zero (u(0) = u(T) = 0; needs 0 within [u_min, u_max]): a
+  /// command cut at T releases the quasi-static deflection of every mode, modelled or not.
+  bool zero_end_commands = false;
+
+  /// Elastic modes inside the problem (docs/theory.md section 11): the state also holds
+  /// the first-order elastic motion about the rigid one, from rest at t = 0.
+  bool elastic = false;
+  /// With elastic: the elastic coordinates of the problem: all_modes (-1), the body's own
+  /// q (the first-order model itself); or m >= 1, its first m elastic modes at rest (a
+  /// modal truncation: modes the mesh cannot resolve are left out, docs/theory.md).
+  int elastic_modes = -1;
+  /// With elastic: the first `modes_at_rest` elastic modes that the actuators excite end
+  /// at rest, [ω_j η_j(T), η_j'(T)] = 0 (mass-normalized modes at rest, eq. 4.1); all_modes:
+  /// every elastic mode, q(T) = q'(T) = 0; 0: none.
+  static constexpr int all_modes = -1;
+  int modes_at_rest = 0;
+  /// With elastic: weight (>= 0) on the residual vibration energy E_vib(T) [J], eq. 6.8.
+  double w_vibration = 0.0;
+  /// With elastic: |Φ(x) q| <= tip_deflection_limit_m [m] at both ends of the beam at every
+  /// collocation point (knots and midpoints; the compressed form: knots). > 0; inf: none.
+  double tip_deflection_limit_m = inf;
 };
 
 /// How the continuous problem becomes an NLP (see trajopt/collocation.hpp).
@@ -126,6 +148,10 @@ std::vector<FieldProblem> problems(const ManeuverProblem& problem, int element_c
 std::vector<FieldProblem> problems(const TrajoptOptions& options);
 /// Throws std::invalid_argument listing every problem found.
 void validate(const FlexibleBody& body, const ManeuverProblem& problem);
+/// The same problem with the elastic part taken out (elastic, modes_at_rest, vibration
+/// weight and tip bound cleared; the rest kept): its solution is the rigid optimum that a
+/// vibration-aware maneuver is compared with.
+ManeuverProblem rigid_counterpart(const ManeuverProblem& problem);
 void validate(const TrajoptOptions& options);
 
 }  // namespace freeflex

@@ -70,9 +70,19 @@ struct TrajoptResult {
   std::vector<MeshRound> rounds;    ///< first solve, then each refinement
 
   Eigen::VectorXd t;      ///< N+1 knot times [s]
-  Eigen::MatrixXd x;      ///< (N+1) x 6 knot states
+  Eigen::MatrixXd x;      ///< (N+1) x 6 knot states (rigid part)
+  /// (N+1) x (4 + 2n) elastic knot states x1 (trajopt/elastic_dynamics.hpp); 0 columns
+  /// without problem.elastic.
+  Eigen::MatrixXd x_elastic;
+  /// With problem.elastic: E_vib(T) of the optimizer's elastic state (eq. 6.8) [J] and the
+  /// largest |Φ q| at either end of the beam over the collocation points [m].
+  double terminal_vibration_energy_J = 0.0;
+  double peak_tip_deflection_m = 0.0;
+  /// ∫ uᵀ W u dt of the returned commands (W: the problem's energy_weights), whatever the
+  /// objective; exact for the transcription's piecewise-polynomial controls.
+  double control_energy = 0.0;
   Eigen::MatrixXd u;      ///< (N+1) x nu knot controls
-  Eigen::VectorXd t_mid;  ///< Hermite–Simpson only: N midpoint times, states, controls
+  Eigen::VectorXd t_mid;  ///< Hermite–Simpson only: N midpoint times, rigid states, controls
   Eigen::MatrixXd x_mid;
   Eigen::MatrixXd u_mid;
 

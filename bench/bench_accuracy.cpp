@@ -1,0 +1,198 @@
+// Benchmark (not a test): work and precision of the simulations, issue 19 acceptance 2.
+// The paper's moment example (M_z = +-1 N m pulse at the centre of the 1 m, 1 kg, EI = 1
+// beam, 0-1 s), NOA 6 over 0-3 s and NOA 20 over 0-1 s, output every 10 ms. For each
+// integration option and rtol 1e-6 ... 1e-12 (atol = rtol / 100): the error in θ and q
+// against a tight reference of the same model (max over the output times), the global
+// error estimate freeflex reports (a second run at rtol/100, GlobalErrorEstimate), their
+// ratio, CPU time (minimum of `reps` runs) and steps. Prints a Markdown table.
+//
+//   build/bench/bench_accuracy [reps]            the table
+//   build/bench/bench_accuracy --export DIR      model data, right-hand sides at random
+//       states and the reference θ(t), q(t) for scripts/dop853_compare.py (SciPy rows)
+#include <time.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <iostream>
+#include <random>
+#include <string>
+
+#include "freeflex/dynamics/full_model.hpp"
+#include "freeflex/sim/simulate.hpp"
+
+using namespace freeflex;
+
+namespace {
+
+double cpu_seconds() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+struct Case {
+  FlexibleBody body;
+  Excitation ex;
+};
+
+Case moment_case(int noa) {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  return {FlexibleBody(beam, noa, {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}}),
+          Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0})}}};
+}
+
+SimulationOptions options(double duration, double rtol, IntegratorOptions::Method m, SimulationOptions::Variables v) {
+  SimulationOptions o;
+  o.duration_s = duration;
+  o.output_step_s = 0.01;
+  o.integrator.rtol = rtol;
+  o.integrator.atol = rtol * 1e-2;
+  o.integrator.method = m;
+  o.full_variables = o.first_order_variables = v;
+  return o;
+}
+
+struct Option {
+  const char* name;
+  bool full;
+  IntegratorOptions::Method method;
+  SimulationOptions::Variables variables;
+};
+
+SimulationResult run(const Case& c, const Option& op, const SimulationOptions& o) {
+  return op.full ? simulate_full(c.body, c.ex, o) : simulate_perturbation(c.body, c.ex, o).total;
+}
+
+void table(int reps) {
+  using M = IntegratorOptions::Method;
+  using V = SimulationOptions::Variables;
+  const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical},
+                         {"full, Adams, modal", true, M::Adams, V::Modal},
+                         {"full, BDF, physical", true, M::Bdf, V::Physical},
+                         {"perturbation, Adams, modal (default)", false, M::Adams, V::Modal},
+                         {"perturbation, Adams, physical", false, M::Adams, V::Physical}};
+  std::cout << "| NOA | model, method, variables | rtol | error θ [rad] | estimate θ | ratio | error q | estimate q "
+               "| ratio | CPU [ms] | steps |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  for (int noa : {6, 20}) {
+    const double T = noa == 6 ? 3.0 : 1.0;
+    const Case c = moment_case(noa);
+    // References: each model at rtol 1e-13 with Adams, the full model in physical variables,
+    // the perturbation solution in modal ones (in physical variables its error at 1e-12 is
+    // 7.5e-10 rad at NOA 6, against 1.7e-10 in modal ones, so it is the poorer reference).
+    const SimulationOptions ref_o = options(T, 1e-13, M::Adams, V::Physical);
+    const SimulationResult ref_full = simulate_full(c.body, c.ex, ref_o);
+    const SimulationResult ref_pert =
+        simulate_perturbation(c.body, c.ex, options(T, 1e-13, M::Adams, V::Modal)).total;
+    // The references' own error: against rtol 1e-14 (printed for the record).
+    const SimulationOptions ref2_o = options(T, 1e-14, M::Adams, V::Physical);
+    const SimulationResult ref2_full = simulate_full(c.body, c.ex, ref2_o);
+    std::cerr << "NOA " << noa << ": full reference rtol 1e-13 vs 1e-14: theta "
+              << (ref_full.z.col(2) - ref2_full.z.col(2)).cwiseAbs().maxCoeff() << ", q "
+              << (ref_full.z.rightCols(noa) - ref2_full.z.rightCols(noa)).cwiseAbs().maxCoeff() << '\n';
+    for (const Option& op : opts) {
+      if (noa == 20 && !op.full && op.variables == V::Physical) continue;  // 0.35 s a run; not needed
+      for (double rtol : {1e-6, 1e-8, 1e-10, 1e-12}) {
+        if (op.method == M::Bdf && rtol < 1e-10) continue;  // BDF at 1e-12: minutes
+        const SimulationOptions o = options(T, rtol, op.method, op.variables);
+        SimulationResult r;
+        double best = 1e300;
+        for (int k = 0; k < reps; ++k) {
+          const double t0 = cpu_seconds();
+          r = run(c, op, o);
+          best = std::min(best, cpu_seconds() - t0);
+        }
+        const SimulationOptions o2 = error_reference_options(o);
+        const GlobalErrorEstimate e = compare_runs(r, run(c, op, o2), o2);
+        const SimulationResult& ref = op.full ? ref_full : ref_pert;
+        if (!r.ok() || !e.available) {
+          std::cout << "| " << noa << " | " << op.name << " | " << rtol << " | failed: " << r.message << e.message
+                    << " |\n";
+          continue;
+        }
+        const double et = (r.z.col(2) - ref.z.col(2)).cwiseAbs().maxCoeff();
+        const double eq = (r.z.rightCols(noa) - ref.z.rightCols(noa)).cwiseAbs().maxCoeff();
+        std::cout << std::setprecision(2) << "| " << noa << " | " << op.name << " | " << rtol << " | " << et << " | "
+                  << e.theta_rad << " | " << e.theta_rad / et << " | " << eq << " | " << e.q << " | " << e.q / eq
+                  << " | " << std::setprecision(3) << 1e3 * best << " | " << r.steps << " |" << std::endl;
+      }
+    }
+  }
+}
+
+/// Model data (JSON), right-hand sides at random states (CSV) and the reference run of the
+/// full model (CSV) for the SciPy comparison.
+void export_case(const std::string& dir) {
+  for (int noa : {6, 20}) {
+    const double T = noa == 6 ? 3.0 : 1.0;
+    const Case c = moment_case(noa);
+    const ModalIntegrals& mi = c.body.integrals();
+    const int n = noa, N = n + 3;
+    std::ofstream js(dir + "/model_noa" + std::to_string(noa) + ".json");
+    js << std::setprecision(17);
+    auto vec = [&](const Eigen::Ref<const Eigen::RowVectorXd>& v) {
+      js << '[';
+      for (int i = 0; i < v.size(); ++i) js << (i ? ", " : "") << v(i);
+      js << ']';
+    };
+    auto mat = [&](const Eigen::MatrixXd& A) {
+      js << '[';
+      for (int i = 0; i < A.rows(); ++i) {
+        js << (i ? ", " : "");
+        vec(A.row(i));
+      }
+      js << ']';
+    };
+    js << "{\"noa\": " << n << ", \"m\": " << mi.m << ", \"S_o\": " << mi.S_o << ", \"I_o\": " << mi.I_o
+       << ", \"duration_s\": " << T << ", \"torque_at_m\": 0.5,\n \"Phi_bar\": ";
+    vec(mi.Phi_bar);
+    js << ",\n \"Phi_tilde\": ";
+    vec(mi.Phi_tilde);
+    js << ",\n \"M\": ";
+    mat(mi.M);
+    js << ",\n \"K\": ";
+    mat(mi.K);
+    js << ",\n \"torque_slope\": ";
+    vec(c.body.element_slope(0));
+    js << "}\n";
+    // Right-hand sides at random states of moderate size, the command +1 and -1.
+    const FullModel model(c.body);
+    FullModel::Data d = model.create_data();
+    std::mt19937 gen(19);
+    std::uniform_real_distribution<double> U(-1.0, 1.0);
+    std::ofstream rc(dir + "/rhs_noa" + std::to_string(noa) + ".csv");
+    rc << std::setprecision(17);
+    for (int k = 0; k < 20; ++k) {
+      Eigen::VectorXd x(2 * N);
+      for (int i = 0; i < 2 * N; ++i) x(i) = U(gen) * (i < N ? (i >= 3 ? 0.05 : 3.0) : (i >= N + 3 ? 2.0 : 20.0));
+      const Eigen::VectorXd u = Eigen::VectorXd::Constant(1, k % 2 ? -1.0 : 1.0);
+      if (!model.rhs(d, x, u)) continue;
+      rc << u(0);
+      for (int i = 0; i < 2 * N; ++i) rc << ',' << x(i);
+      for (int i = 0; i < 2 * N; ++i) rc << ',' << d.x_dot(i);
+      rc << '\n';
+    }
+    const SimulationResult ref =
+        simulate_full(c.body, c.ex, options(T, 1e-13, IntegratorOptions::Method::Adams, SimulationOptions::Variables::Physical));
+    std::ofstream rf(dir + "/reference_noa" + std::to_string(noa) + ".csv");
+    rf << std::setprecision(17);
+    for (int i = 0; i < ref.t.size(); ++i) {
+      rf << ref.t(i);
+      for (int j = 0; j < N; ++j) rf << ',' << ref.z(i, j);
+      rf << '\n';
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--export") {
+    export_case(argv[2]);
+    return 0;
+  }
+  table(argc > 1 ? std::atoi(argv[1]) : 3);
+  return 0;
+}

@@ -1,0 +1,100 @@
+#pragma once
+// [lqg] and [sweep]: the [controller]'s TV-LQR flown as a sampled-data controller on the
+// full nonlinear model, with the exact state or with a Kalman filter (LQG), on the
+// nominal plant and on every sample of an uncertainty sweep (control/lqg.hpp).
+//
+// A sweep's results do not depend on how it is run: sample i draws its parameters and
+// its noise from (seed, i) alone, samples are independent, and statistics are taken in
+// sample order, so any number of threads (std::thread) or MPI ranks gives the same bytes.
+// A journal beside the results keeps every finished sample (exact, hexadecimal floats);
+// a run of the same design that finds it skips those samples.
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "freeflex/app/studies.hpp"
+#include "freeflex/control/lqg.hpp"
+#include "freeflex/control/metrics.hpp"
+
+namespace freeflex {
+
+/// [lqg]: full-state TV-LQR and LQG, both sampled, on the nominal full model.
+struct LqgStudyResult {
+  StudyStatus status = StudyStatus::Ok;
+  std::string message;
+  bool ok() const { return status == StudyStatus::Ok; }
+  std::vector<std::string> warnings;
+
+  KalmanResult filter;
+  TvlqrResult digital_law;  ///< solve_discrete_tvlqr at the sample rate
+  struct Case {
+    /// tvlqr_sampled: the continuous law's gains at the samples (exact state);
+    /// digital_tvlqr: the digital law (exact state); lqg: the digital law on the filter's estimate
+    std::string name;
+    SampledLoopResult run;
+    ResponseMetrics metrics;
+  };
+  std::vector<Case> cases;
+  double open_loop_energy_J = 0.0;    ///< the [controller]'s open loop on the full model
+  double continuous_energy_J = 0.0;   ///< the [controller]'s continuous TV-LQR on the full model
+  /// The filter's 1σ of each elastic coordinate q_i at the end (square roots of P⁺'s diagonal).
+  Eigen::VectorXd final_elastic_std;
+};
+LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult& suppression,
+                             const ManeuverStudyResult* maneuver = nullptr, const StudyLog& log = {});
+
+/// One sample of a sweep.
+struct SweepSample {
+  long index = -1;              ///< -1: not run
+  std::vector<double> values;   ///< one per SweepStudy::parameters, in their order
+  bool ok = false;              ///< the flight completed
+  ResponseMetrics metrics;
+  double wall_time_s = 0.0;
+};
+
+/// How a sweep runs: threads, this process's share of the samples (MPI ranks), and the
+/// journal of finished samples.
+struct SweepExecution {
+  int threads = 0;  ///< 0: every core (std::thread::hardware_concurrency)
+  int rank = 0;     ///< this process runs the samples i with i % ranks == rank
+  int ranks = 1;
+  /// After the local share: completes `samples` with the other ranks' (MPI); must leave
+  /// every entry run. Needed when ranks > 1.
+  std::function<void(std::vector<SweepSample>& samples)> gather;
+  std::string journal;  ///< file of finished samples (created, appended, read back); empty: none
+};
+/// Throws std::invalid_argument for threads < 0, rank outside [0, ranks), or ranks > 1
+/// without gather.
+void validate(const SweepExecution& execution);
+
+struct SweepStudyResult {
+  StudyStatus status = StudyStatus::Ok;
+  std::string message;
+  bool ok() const { return status == StudyStatus::Ok; }
+  std::vector<std::string> warnings;
+
+  std::vector<std::string> parameter_names;
+  std::vector<SweepSample> samples;  ///< in sample order
+  long completed = 0, failed = 0;
+  long resumed = 0;  ///< read from the journal instead of flown
+  /// Residual vibration energy of the completed samples [J].
+  double mean_J = 0.0, p05_J = 0.0, p50_J = 0.0, p95_J = 0.0, worst_J = 0.0;
+  double fraction_meeting = 0.0;  ///< of all samples (a failed one does not meet it)
+  int threads = 1, ranks = 1;
+  double wall_time_s = 0.0;         ///< flying this process's samples
+  double time_per_sample_s = 0.0;   ///< wall time / samples flown here (threads and ranks included)
+  double cpu_time_per_sample_s = 0.0;  ///< mean time of one sample on one core
+};
+SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyResult& suppression,
+                                 const ManeuverStudyResult* maneuver = nullptr, const SweepExecution& execution = {},
+                                 const StudyLog& log = {});
+
+/// The parameter values of sample `index` (one per parameter, in order): grid
+/// parameters from index / samples, the others drawn from (seed, index).
+std::vector<double> sweep_sample_values(const SweepStudy& sweep, long index);
+
+}  // namespace freeflex

@@ -1,0 +1,456 @@
+// [lqg] and [sweep] (app/sweep.hpp): the [controller]'s law flown sampled on the full
+// model, on the nominal plant (exact state and LQG) and on every sample of an uncertainty
+// sweep, in parallel over threads and MPI ranks, resumable from a journal.
+#include "freeflex/app/sweep.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "app/sweep_files.hpp"
+#include "freeflex/io/output.hpp"
+#include "freeflex/version.hpp"
+#include "freeflex/control/lqr.hpp"
+#include "util/format.hpp"
+
+namespace freeflex {
+namespace {
+
+/// Marks a study failed for `why`, keeping it among its warnings and reporting it.
+template <class R>
+void fail_study(R& r, const StudyLog& log, const std::string& why) {
+  r.status = StudyStatus::Failed;
+  r.message = r.message.empty() ? why : r.message + "; " + why;
+  r.warnings.push_back(why);
+  if (log.warn) log.warn(why);
+}
+
+}  // namespace
+
+namespace detail {
+
+Flight::Flight(const Design& design, const SuppressionStudyResult& suppression, const ManeuverStudyResult* maneuver)
+    : body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios),
+      loads(design.excitation()),
+      nominal(suppression.chain.nominal) {
+  const ControllerStudy& st = *design.controller;
+  if (maneuver && maneuver->flown) u0 = maneuver_actuator_commands(*maneuver->flown, st.actuators);  // as suppress_vibration
+  model = std::make_unique<FirstOrderModel>(body, *nominal, nominal_element_commands(loads, st.actuators, u0),
+                                            st.actuators);
+}
+
+KalmanResult design_filter(const Design& design, const Flight& f) {
+  const LqgStudy& lq = *design.lqg;
+  const Eigen::MatrixXd C = output_matrix(f.body, design.sensors);
+  const Eigen::MatrixXd V = measurement_variance(design.sensors, lq.sample_rate_hz).asDiagonal();
+  const Eigen::MatrixXd W = lq.process_noise_density.cwiseAbs2().asDiagonal();
+  const int n = f.model->state_size();
+  const Eigen::MatrixXd P0 = Eigen::MatrixXd::Identity(n, n) * (lq.initial_std * lq.initial_std);
+  return design_kalman(ltv_system(*f.model), C, V, W, P0, 0.0, design.controller->simulate_until_s, lq.sample_rate_hz);
+}
+
+TvlqrResult design_digital_law(const Design& design, const Flight& f, const TvlqrResult& continuous, double rate,
+                               const DiscreteLtv* model) {
+  const ControllerStudy& st = *design.controller;
+  const std::vector<double> times = sample_times(0.0, st.horizon_s, rate);
+  DiscreteLtv own;
+  if (!model || model->t != times) {
+    const int m = f.model->input_size();
+    own = discretize(ltv_system(*f.model), times, Eigen::MatrixXd::Zero(m, m));
+    if (!own.ok()) {
+      TvlqrResult r;
+      r.status = TvlqrResult::Status::IntegrationFailed;
+      r.message = own.message;
+      return r;
+    }
+    model = &own;
+  }
+  const Eigen::MatrixXd Q = vibration_weight(f.body, st.weight_elastic, st.weight_rigid_position, st.weight_rigid_rate);
+  const Eigen::MatrixXd R = st.input_weights.asDiagonal();
+  return solve_discrete_tvlqr(*model, Q, R, continuous.Qf);
+}
+
+MetricTargets targets(const Design& design, const Flight& f) {
+  MetricTargets t;
+  const RigidState end = f.nominal->at(Instant::at(design.controller->simulate_until_s));
+  t.R_target = end.pos.head<2>();
+  t.theta_target = end.pos(2);
+  return t;
+}
+
+}  // namespace detail
+
+LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult& suppression,
+                             const ManeuverStudyResult* maneuver, const StudyLog& log) {
+  LqgStudyResult r;
+  const LqgStudy& lq = *design.lqg;
+  auto fail = [&](const std::string& why) { fail_study(r, log, why); };
+  if (!suppression.chain.law.ok() || !suppression.chain.nominal) {
+    fail("[lqg]: the [controller]'s TV-LQR is not available (" + suppression.chain.message + ")");
+    return r;
+  }
+  for (const auto& c : suppression.cases)
+    if (c.model == "nonlinear" && c.name == "open_loop") r.open_loop_energy_J = c.metrics.residual_vibration_energy_J;
+    else if (c.model == "nonlinear" && c.name == "tvlqr") r.continuous_energy_J = c.metrics.residual_vibration_energy_J;
+  const detail::Flight f(design, suppression, maneuver);
+  if (log.log) *log.log << "lqg: Kalman filter at " << lq.sample_rate_hz << " Hz ... " << std::flush;
+  r.filter = detail::design_filter(design, f);
+  if (log.log) *log.log << (r.filter.ok() ? "done" : "FAILED") << '\n';
+  if (!r.filter.ok()) {
+    fail("[lqg]: the Kalman filter failed: " + r.filter.message);
+    return r;
+  }
+  r.final_elastic_std = r.filter.P_post.back().diagonal().segment(3, f.body.n()).cwiseSqrt();
+  SampledLoopOptions so;
+  so.sample_rate_hz = lq.sample_rate_hz;
+  so.t_end = design.controller->simulate_until_s;
+  so.limits = design.controller->limits;
+  so.delay_known = lq.delay_known;
+  const double out_step = 0.005;  // the [controller]'s comparison step
+  const double ratio = out_step * lq.sample_rate_hz;
+  so.output_step_s = std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1.0 ? out_step : 0.0;
+  const MetricTargets tg = detail::targets(design, f);
+  if (log.log) *log.log << "lqg: digital TV-LQR at " << lq.sample_rate_hz << " Hz ... " << std::flush;
+  r.digital_law = detail::design_digital_law(design, f, suppression.chain.law, lq.sample_rate_hz, &r.filter.model);
+  if (log.log) *log.log << (r.digital_law.ok() ? "done" : "FAILED") << '\n';
+  if (!r.digital_law.ok()) {
+    fail("[lqg]: the digital TV-LQR failed: " + r.digital_law.message);
+    return r;
+  }
+  using FB = SampledLoopOptions::Feedback;
+  const std::vector<std::pair<std::string, FB>> cases{
+      {"tvlqr_sampled", FB::FullState}, {"digital_tvlqr", FB::FullState}, {"lqg", FB::Lqg}};
+  for (const auto& [name, feedback] : cases) {
+    so.feedback = feedback;
+    SampledLoopOptions sk = so;
+    if (feedback == FB::FullState) sk.delay_known = false;
+    const TvlqrResult& law = name == "tvlqr_sampled" ? suppression.chain.law : r.digital_law;
+    if (log.log) *log.log << "lqg: " << name << " on the full model ... " << std::flush;
+    LqgStudyResult::Case c;
+    c.name = name;
+    c.run = simulate_sampled_loop(f.body, *f.model, f.loads, f.u0, law, &r.filter, design.sensors, lq.plant, sk);
+    if (log.log) *log.log << (c.run.ok() ? "done" : "FAILED") << " (" << std::fixed << std::setprecision(2)
+                          << c.run.wall_time_s << " s)" << std::defaultfloat << '\n';
+    if (!c.run.ok()) {
+      fail("[lqg]: " + name + ": " + c.run.message);
+      continue;
+    }
+    c.metrics = response_metrics(f.body, c.run.t, c.run.z, c.run.z_dot, c.run.commands, tg);
+    r.cases.push_back(std::move(c));
+  }
+  if (log.log) {
+    *log.log << "  case               E_vib(end) [J]  mean, last 1 s [J]\n";
+    *log.log << "  open_loop          " << std::setw(14) << std::setprecision(4) << r.open_loop_energy_J << '\n';
+    *log.log << "  tvlqr_continuous   " << std::setw(14) << r.continuous_energy_J << '\n';
+    for (const auto& c : r.cases)
+      *log.log << "  " << std::left << std::setw(19) << c.name << std::right << std::setw(14)
+               << c.metrics.residual_vibration_energy_J << std::setw(20) << c.metrics.mean_vibration_energy_J << '\n';
+  }
+  return r;
+}
+
+// ---------------------------------------------------------------------------------------
+// Sweeps
+
+namespace {
+
+/// splitmix64's finalizer: decorrelates (seed, index, stream) into a seed.
+std::uint64_t mix(std::uint64_t a, std::uint64_t b) {
+  std::uint64_t z = a * 0x9e3779b97f4a7c15ULL + b + 0x632be59bd9b4e019ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+/// A uniform number in [0, 1) from the stream's normal pair: Φ would cost more; the
+/// parameters' uniform draws come from their own splitmix64 stream instead.
+double uniform01(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+double percentile(const std::vector<double>& sorted, double p) {
+  if (sorted.empty()) return std::nan("");
+  const double x = p * static_cast<double>(sorted.size() - 1);
+  const std::size_t i = static_cast<std::size_t>(std::floor(x));
+  const double frac = x - static_cast<double>(i);
+  return i + 1 < sorted.size() ? sorted[i] + frac * (sorted[i + 1] - sorted[i]) : sorted[i];
+}
+
+constexpr int kMetricFields = 5;  // residual, mean, peak tip, attitude error, position error
+
+std::string hex(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%a", v);
+  return buf;
+}
+
+std::string journal_header(const Design& d) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "freeflex sweep journal 1 design %016" PRIx64 " samples %ld", d.digest,
+                d.sweep->total_samples());
+  return std::string(buf) + " freeflex " + version();  // another version may compute other bits
+}
+
+std::string journal_line(const SweepSample& s) {
+  std::ostringstream os;
+  os << s.index << ' ' << (s.ok ? 1 : 0);
+  for (double v : s.values) os << ' ' << hex(v);
+  const ResponseMetrics& m = s.metrics;
+  for (double v : {m.residual_vibration_energy_J, m.mean_vibration_energy_J, m.peak_tip_deflection_m,
+                   m.final_attitude_error_rad, m.final_position_error_m, m.peak_command, s.wall_time_s})
+    os << ' ' << hex(v);
+  os << " end\n";
+  return os.str();
+}
+
+/// The finished samples of a journal written for this design (none if absent or for
+/// another design); a line cut short by a kill is ignored.
+std::vector<SweepSample> read_journal(const std::string& path, const Design& d, std::size_t parameters) {
+  std::vector<SweepSample> out;
+  std::ifstream in(path);
+  if (!in) return out;
+  std::string line;
+  if (!std::getline(in, line) || line != journal_header(d)) return out;
+  while (std::getline(in, line)) {
+    std::istringstream is(line);
+    SweepSample s;
+    int ok = 0;
+    if (!(is >> s.index >> ok)) continue;
+    std::vector<double> v;
+    std::string tok;
+    while (is >> tok && tok != "end") v.push_back(std::strtod(tok.c_str(), nullptr));
+    if (tok != "end" || v.size() != parameters + kMetricFields + 2) continue;
+    if (s.index < 0 || s.index >= d.sweep->total_samples()) continue;
+    s.ok = ok == 1;
+    s.values.assign(v.begin(), v.begin() + static_cast<long>(parameters));
+    std::size_t k = parameters;
+    s.metrics.residual_vibration_energy_J = v[k++];
+    s.metrics.mean_vibration_energy_J = v[k++];
+    s.metrics.peak_tip_deflection_m = v[k++];
+    s.metrics.final_attitude_error_rad = v[k++];
+    s.metrics.final_position_error_m = v[k++];
+    s.metrics.peak_command = v[k++];
+    s.wall_time_s = v[k++];
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> sweep_sample_values(const SweepStudy& sw, long index) {
+  std::vector<double> v;
+  std::uint64_t state = mix(sw.seed, static_cast<std::uint64_t>(index));
+  NormalStream normal(mix(state, 1));
+  long grid = index / sw.samples;
+  for (const SweepParameter& p : sw.parameters) {
+    switch (p.kind) {
+      case SweepParameter::Kind::Uniform: v.push_back(p.a + (p.b - p.a) * uniform01(state)); break;
+      case SweepParameter::Kind::Normal: {
+        double x = p.a + p.b * normal.next();
+        x = std::max(x, p.a - 5.0 * p.b);  // the reader keeps mean - 5 std inside the bounds
+        v.push_back(x);
+        break;
+      }
+      case SweepParameter::Kind::Grid: {
+        const long i = grid % p.points;
+        grid /= p.points;
+        v.push_back(p.a + (p.b - p.a) * static_cast<double>(i) / (p.points - 1));
+        break;
+      }
+    }
+  }
+  return v;
+}
+
+void validate(const SweepExecution& e) {
+  if (e.threads < 0) throw std::invalid_argument("sweep execution: threads = " + std::to_string(e.threads) + ", must be >= 0");
+  if (e.ranks < 1 || e.rank < 0 || e.rank >= e.ranks)
+    throw std::invalid_argument("sweep execution: rank " + std::to_string(e.rank) + " of " + std::to_string(e.ranks) +
+                                ", expected 0 <= rank < ranks");
+  if (e.ranks > 1 && !e.gather) throw std::invalid_argument("sweep execution: ranks > 1 needs a gather function");
+}
+
+SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyResult& suppression,
+                                 const ManeuverStudyResult* maneuver, const SweepExecution& ex, const StudyLog& log) {
+  validate(ex);
+  const SweepStudy& sw = *design.sweep;
+  SweepStudyResult r;
+  for (const SweepParameter& p : sw.parameters) r.parameter_names.push_back(to_string(p.name));
+  auto fail = [&](const std::string& why) { fail_study(r, log, why); };
+  if (!suppression.chain.law.ok() || !suppression.chain.nominal) {
+    fail("[sweep]: the [controller]'s TV-LQR is not available (" + suppression.chain.message + ")");
+    return r;
+  }
+  const detail::Flight f(design, suppression, maneuver);
+  const bool lqg = sw.feedback == SampledLoopOptions::Feedback::Lqg;
+  const double rate = lqg ? design.lqg->sample_rate_hz : sw.sample_rate_hz;
+  KalmanResult filter;
+  if (lqg) {
+    filter = detail::design_filter(design, f);
+    if (!filter.ok()) {
+      fail("[sweep]: the Kalman filter failed: " + filter.message);
+      return r;
+    }
+  }
+  const TvlqrResult law = detail::design_digital_law(design, f, suppression.chain.law, rate, lqg ? &filter.model : nullptr);
+  if (!law.ok()) {
+    fail("[sweep]: the digital TV-LQR failed: " + law.message);
+    return r;
+  }
+  const MetricTargets tg = detail::targets(design, f);
+  const long total = sw.total_samples();
+  r.samples.resize(static_cast<std::size_t>(total));
+
+  // the journal: samples finished by an earlier, interrupted run of this design
+  std::vector<char> done(static_cast<std::size_t>(total), 0);
+  std::unique_ptr<std::ofstream> journal;
+  std::mutex journal_mutex;
+  if (!ex.journal.empty()) {
+    for (SweepSample& s : read_journal(ex.journal, design, sw.parameters.size())) {
+      const std::size_t i = static_cast<std::size_t>(s.index);
+      if (done[i]) continue;
+      done[i] = 1;
+      r.samples[i] = std::move(s);
+      ++r.resumed;
+    }
+    const bool fresh = r.resumed == 0;
+    journal = std::make_unique<std::ofstream>(ex.journal, fresh ? std::ios::trunc : std::ios::app);
+    if (!*journal) throw IoError("cannot write the sweep journal '" + ex.journal + "'");
+    if (fresh) *journal << journal_header(design) << '\n' << std::flush;
+  }
+  std::vector<long> todo;
+  for (long i = ex.rank; i < total; i += ex.ranks)
+    if (!done[static_cast<std::size_t>(i)]) todo.push_back(i);
+
+  auto fly = [&](long index) {
+    const auto clock0 = std::chrono::steady_clock::now();
+    SweepSample s;
+    s.index = index;
+    s.values = sweep_sample_values(sw, index);
+    BeamProperties props = design.beam;
+    std::vector<double> damping = design.damping_ratios;
+    PlantOptions po = lqg ? design.lqg->plant : PlantOptions{};
+    if (!lqg) po.measurement_noise = false;
+    po.seed = mix(mix(sw.seed, static_cast<std::uint64_t>(index)), 2);
+    for (std::size_t k = 0; k < sw.parameters.size(); ++k) {
+      const double v = s.values[k];
+      switch (sw.parameters[k].name) {
+        case SweepParameter::Name::BendingStiffnessScale:
+          for (auto& seg : props.segments) seg.bending_stiffness_Nm2 *= v;
+          break;
+        case SweepParameter::Name::MassScale:
+          for (auto& seg : props.segments) seg.mass_per_length_kg_m *= v;
+          break;
+        case SweepParameter::Name::DampingRatio: damping.assign(static_cast<std::size_t>(f.body.n()), v); break;
+        case SweepParameter::Name::ActuatorGain: po.actuator_gain = v; break;
+        case SweepParameter::Name::DelayS: po.delay_s = v; break;
+        case SweepParameter::Name::LagS: po.lag_s = v; break;
+      }
+    }
+    try {
+      const FlexibleBody plant(Beam(props), design.noa, design.force_elements(), damping, design.geometric_stiffening);
+      SampledLoopOptions so;
+      so.feedback = sw.feedback;
+      so.sample_rate_hz = rate;
+      so.t_end = design.controller->simulate_until_s;
+      so.limits = design.controller->limits;
+      so.delay_known = lqg && design.lqg->delay_known;
+      so.output_step_s = 0.0;
+      const SampledLoopResult run = simulate_sampled_loop(plant, *f.model, f.loads, f.u0, law,
+                                                          lqg ? &filter : nullptr, design.sensors, po, so);
+      s.ok = run.ok();
+      if (s.ok) s.metrics = response_metrics(plant, run.t, run.z, run.z_dot, run.commands, tg);
+    } catch (const std::invalid_argument&) {
+      s.ok = false;  // a sample the plant cannot be built for (cannot happen for read designs)
+    }
+    if (!s.ok) {
+      const double nan = std::nan("");
+      s.metrics.residual_vibration_energy_J = s.metrics.mean_vibration_energy_J = nan;
+    }
+    s.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+    return s;
+  };
+
+  int threads = ex.threads > 0 ? ex.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  threads = static_cast<int>(std::min<long>(threads, std::max<long>(1, static_cast<long>(todo.size()))));
+  r.threads = threads;
+  r.ranks = ex.ranks;
+  if (log.log)
+    *log.log << "sweep: " << total << " samples (" << todo.size() << " here, " << r.resumed << " from the journal), "
+             << threads << " thread(s), " << ex.ranks << " rank(s) ... " << std::flush;
+  const auto clock0 = std::chrono::steady_clock::now();
+  std::atomic<std::size_t> next{0};
+  std::atomic<long> finished{0};
+  auto worker = [&]() {
+    for (std::size_t j = next++; j < todo.size(); j = next++) {
+      SweepSample s = fly(todo[j]);
+      if (journal) {
+        const std::string line = journal_line(s);
+        std::lock_guard<std::mutex> lock(journal_mutex);
+        *journal << line << std::flush;  // in the kernel's cache: survives the process being killed
+      }
+      r.samples[static_cast<std::size_t>(s.index)] = std::move(s);
+      ++finished;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int i = 1; i < threads; ++i) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+  if (ex.ranks > 1) ex.gather(r.samples);
+  double cpu = 0.0;
+  for (long i : todo) cpu += r.samples[static_cast<std::size_t>(i)].wall_time_s;
+  r.time_per_sample_s = todo.empty() ? 0.0 : r.wall_time_s / static_cast<double>(todo.size());
+  r.cpu_time_per_sample_s = todo.empty() ? 0.0 : cpu / static_cast<double>(todo.size());
+  if (log.log) *log.log << "done (" << std::fixed << std::setprecision(2) << r.wall_time_s << " s, "
+                        << std::setprecision(4) << r.time_per_sample_s << " s per sample)" << std::defaultfloat << '\n';
+
+  // statistics in sample order
+  std::vector<double> energies;
+  long meeting = 0;
+  double sum = 0.0;
+  for (const SweepSample& s : r.samples) {
+    if (s.index < 0) continue;
+    if (!s.ok) {
+      ++r.failed;
+      continue;
+    }
+    ++r.completed;
+    const double e = s.metrics.residual_vibration_energy_J;
+    energies.push_back(e);
+    sum += e;
+    meeting += e <= sw.requirement_energy_J;
+  }
+  std::vector<double> sorted = energies;
+  std::sort(sorted.begin(), sorted.end());
+  r.mean_J = energies.empty() ? std::nan("") : sum / static_cast<double>(energies.size());
+  r.p05_J = percentile(sorted, 0.05);
+  r.p50_J = percentile(sorted, 0.50);
+  r.p95_J = percentile(sorted, 0.95);
+  r.worst_J = sorted.empty() ? std::nan("") : sorted.back();
+  r.fraction_meeting = static_cast<double>(meeting) / static_cast<double>(total);
+  if (r.failed > 0) fail("[sweep]: " + std::to_string(r.failed) + " of " + std::to_string(total) + " samples failed");
+  if (log.log)
+    *log.log << "  residual vibration energy [J]: mean " << std::setprecision(4) << r.mean_J << ", p5 " << r.p05_J
+             << ", median " << r.p50_J << ", p95 " << r.p95_J << ", worst " << r.worst_J << "; meeting <= "
+             << sw.requirement_energy_J << " J: " << r.fraction_meeting * 100.0 << "%\n";
+  return r;
+}
+
+}  // namespace freeflex

@@ -1,0 +1,254 @@
+// The vibration-aware maneuver optimizer (ManeuverProblem::elastic): the minimum-time
+// rotation that leaves k modes at rest against the switch-time equations solved by
+// another method (first-order simulations by CVODES, Newton on the switch times); the
+// command bounds between collocation points.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <iomanip>
+
+#include "freeflex/control/switch_time.hpp"
+#include "freeflex/io/design.hpp"
+#include "freeflex/trajopt/chattering.hpp"
+#include "freeflex/trajopt/solve.hpp"
+
+using namespace freeflex;
+
+namespace {
+
+/// The paper's beam turned by a torque at the centre, |τ| <= 1 N m.
+FlexibleBody hub_body(int noa) {
+  return FlexibleBody(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), noa,
+                      {{"hub", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}});
+}
+
+/// Sign changes of u(t) on a grid of `samples`, each placed by linear interpolation.
+std::vector<double> switch_times(const TrajoptResult& r, int samples) {
+  std::vector<double> s;
+  double t0 = 0.0, u0 = r.control_at(0.0)(0);
+  for (int i = 1; i <= samples; ++i) {
+    const double t = r.duration_s * i / samples, u = r.control_at(t)(0);
+    if ((u > 0.0) != (u0 > 0.0)) s.push_back(t0 + (t - t0) * u0 / (u0 - u));
+    t0 = t, u0 = u;
+  }
+  return s;
+}
+
+/// The switch-time equations θ0(T) = Δθ, θ0'(T) = 0, [ω_j η_j(T), η_j'(T)] = 0 of a
+/// bang-bang torque (signs +, −, ...), in the interval durations, from first-order
+/// simulations (bang_bang_residual); Newton with forward-difference Jacobians.
+std::vector<double> newton_switch_times(const FlexibleBody& body, double rotation, int k, std::vector<double> sw,
+                                        double& T) {
+  const ExcitedModes em = excited_modes(body, 0, 0.0);
+  const int N = body.dofs();
+  const double I = body.integrals().I_o;
+  auto residual = [&](const Eigen::VectorXd& D) {
+    std::vector<double> s;
+    double t = 0.0;
+    for (int i = 0; i + 1 < D.size(); ++i) s.push_back(t += D(i));
+    const BangBangResidual r = bang_bang_residual(body, 0, 1.0, s, D.sum(), k, 1e-12, 1e-15);
+    REQUIRE(r.ok());
+    Eigen::VectorXd c(2 * k + 2);
+    double th = 0.0, om = 0.0, sign = 1.0;
+    for (int i = 0; i < D.size(); ++i, sign = -sign) {
+      th += om * D(i) + 0.5 * sign * D(i) * D(i) / I;
+      om += sign * D(i) / I;
+    }
+    c(0) = th - rotation;
+    c(1) = om;
+    for (int j = 0; j < k; ++j) {
+      const int m = em.excited[static_cast<std::size_t>(j)];
+      const Eigen::VectorXd v = em.eigenvectors.col(3 + m);
+      c(2 + 2 * j) = std::sqrt(em.eigenvalues(3 + m)) * v.dot(em.M0 * r.x1_end.head(N));
+      c(3 + 2 * j) = v.dot(em.M0 * r.x1_end.tail(N));
+    }
+    return c;
+  };
+  Eigen::VectorXd D(static_cast<Eigen::Index>(sw.size()) + 1);
+  double t = 0.0;
+  for (std::size_t i = 0; i < sw.size(); ++i) D(static_cast<Eigen::Index>(i)) = sw[i] - t, t = sw[i];
+  D(D.size() - 1) = T - t;
+  for (int it = 0; it < 6; ++it) {
+    const Eigen::VectorXd c = residual(D);
+    Eigen::MatrixXd Jc(c.size(), D.size());
+    for (int i = 0; i < D.size(); ++i) {
+      Eigen::VectorXd Dp = D;
+      Dp(i) += 1e-7;
+      Jc.col(i) = (residual(Dp) - c) / 1e-7;
+    }
+    D -= Jc.colPivHouseholderQr().solve(c);
+  }
+  CHECK(residual(D).cwiseAbs().maxCoeff() < 1e-9);  // a root, not a stall (measured ~1e-13)
+  T = D.sum();
+  std::vector<double> out;
+  t = 0.0;
+  for (int i = 0; i + 1 < D.size(); ++i) out.push_back(t += D(i));
+  return out;
+}
+
+/// Rest-to-rest rotation by `rotation` at least time, |τ| <= 1 N m, the first k excited
+/// modes at rest at T; T starts at t0.
+ManeuverProblem min_time_rotation(double rotation, int k, double t0) {
+  ManeuverProblem p;
+  p.actuators = {0};
+  p.u_min = Eigen::VectorXd::Constant(1, -1.0);
+  p.u_max = Eigen::VectorXd::Constant(1, 1.0);
+  p.x_final(2) = rotation;
+  p.free_time = true;
+  p.w_energy = 0.0;
+  p.w_time = 1.0;
+  p.duration_s = t0;
+  p.t_min_s = 0.5;
+  p.t_max_s = 3.0;
+  p.elastic = true;
+  p.modes_at_rest = k;
+  return p;
+}
+
+/// Hermite-Simpson at N = 150, tight tolerance: switch times resolved within an interval.
+TrajoptOptions rotation_options() {
+  TrajoptOptions o;
+  o.intervals = 150;
+  o.tol = 1e-10;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("minimum-time rotation with k modes at rest: the optimizer and the switch-time equations agree",
+          "[trajopt][slow]") {
+  // NOA 4: two antisymmetric admissible functions, so k = 1 and 2 are both possible.
+  const FlexibleBody body = hub_body(4);
+  const double rotation = 3.0;  // rad, suppress_moment_pulse.toml's bang-bang study
+  for (int k : {1, 2}) {
+    const ManeuverProblem p = min_time_rotation(rotation, k, 1.2);
+    TrajoptOptions o = rotation_options();
+    o.guess.control = [](double t) { return Eigen::VectorXd::Constant(1, t < 0.55 ? 1.0 : -1.0); };
+    const TrajoptResult r = solve_maneuver(body, p, o);
+    REQUIRE(r.ok());
+    const std::vector<double> sw = switch_times(r, 200000);
+    REQUIRE(sw.size() == static_cast<std::size_t>(2 * k + 1));  // the bang-bang structure
+    double T = r.duration_s;
+    const std::vector<double> exact = newton_switch_times(body, rotation, k, sw, T);
+    const SwitchTimeResult nlopt = design_switch_times(body, 0, rotation, 1.0, k);
+    INFO(std::setprecision(9) << "k = " << k << ": optimizer T = " << r.duration_s << " s, switch-time equations T = " << T
+                << " s, NLopt switch-time design T = " << nlopt.duration_s << " s");
+    // Hermite-Simpson at N = 150 with the switches inside intervals: measured 3e-6 (k = 1)
+    CHECK(std::abs(r.duration_s - T) < 1e-4 * T);
+    const double h = r.duration_s / o.intervals;
+    for (std::size_t i = 0; i < sw.size(); ++i) CHECK(std::abs(sw[i] - exact[i]) < h);  // located within an interval
+    // The optimizer's answer is never longer than the NLopt design's (which starts from
+    // closed-form roots and can keep a longer one: 1.0378 s against 1.00079 s at NOA 6, k = 1).
+    REQUIRE(nlopt.ok());
+    CHECK(r.duration_s <= nlopt.duration_s * (1.0 + 1e-6));
+  }
+}
+
+TEST_CASE("commands stay within their limits between collocation points", "[trajopt]") {
+  // The two-thruster minimum-time slew (|u| <= 2 N): saturated arcs on both thrusters.
+  const FlexibleBody body(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), 2,
+                          {{"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
+                           {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
+  ManeuverProblem p;
+  p.actuators = {0, 1};
+  p.u_min = Eigen::Vector2d(-2.0, -2.0);
+  p.u_max = Eigen::Vector2d(2.0, 2.0);
+  p.x_final << 1.0, 0.5, 0.5 * std::acos(-1.0), 0.0, 0.0, 0.0;
+  p.free_time = true;
+  p.w_energy = 0.0;
+  p.w_time = 1.0;
+  p.w_smooth = 1e-4;
+  p.duration_s = 2.0;
+  p.t_min_s = 0.5;
+  p.t_max_s = 10.0;
+  for (Transcription tr :
+       {Transcription::Trapezoidal, Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed}) {
+    TrajoptOptions o;
+    o.transcription = tr;
+    o.intervals = 60;
+    const TrajoptResult r = solve_maneuver(body, p, o);
+    REQUIRE(r.ok());
+    const int fine = 100 * o.intervals;
+    double peak = 0.0;
+    int saturated = 0;
+    for (int i = 0; i <= fine; ++i) {
+      const Eigen::VectorXd u = r.control_at(r.duration_s * i / fine);
+      peak = std::max(peak, u.cwiseAbs().maxCoeff());
+      saturated += u.cwiseAbs().maxCoeff() > 2.0 - 1e-6 ? 1 : 0;
+    }
+    INFO(to_string(tr) << ": peak |u| = " << peak << " N on a grid 100 times finer than the mesh");
+    CHECK(saturated > fine / 10);  // the design has saturated arcs (measured ~half the grid)
+    CHECK(peak <= 2.0 + 1e-7);     // Ipopt's bound tolerance (its bound_relax_factor 1e-8 of 2 N)
+  }
+}
+
+TEST_CASE("a singular arc's chattering is flagged, and the suggested remedy clears it", "[trajopt]") {
+  // designs/slew_min_time.toml without its rate penalty: pure minimum time.
+  const Design d = load_design(std::string(FREEFLEX_SOURCE_DIR) + "/designs/slew_min_time.toml");
+  const FlexibleBody body(Beam(d.beam), d.noa, d.force_elements(), d.damping_ratios);
+  ManeuverProblem p = d.maneuver->problem;
+  REQUIRE(p.w_smooth > 0.0);  // the shipped design's remedy
+  p.w_smooth = 0.0;
+  const TrajoptResult pure = solve_maneuver(body, p, d.maneuver->options);
+  REQUIRE(pure.ok());
+  const ChatteringReport flagged = detect_chattering(pure, p);
+  INFO(flagged.message << "\n" << flagged.remedy);
+  CHECK(flagged.flagged);
+  CHECK(flagged.suggested_smooth_weight > 0.0);
+  CHECK(!flagged.remedy.empty());
+  SECTION("the smoothness weight") {
+    p.w_smooth = flagged.suggested_smooth_weight;
+    const TrajoptResult smooth = solve_maneuver(body, p, d.maneuver->options);
+    REQUIRE(smooth.ok());
+    const ChatteringReport r = detect_chattering(smooth, p);
+    INFO(r.message << "; T = " << smooth.duration_s << " s against " << pure.duration_s << " s");
+    CHECK(!r.flagged);
+    CHECK(smooth.duration_s < pure.duration_s * 1.01);  // a small price in time (measured 0.2%)
+  }
+  SECTION("the rate limit alone narrows the chatter but need not remove it") {
+    p.du_max = flagged.suggested_rate_limit;
+    const TrajoptResult limited = solve_maneuver(body, p, d.maneuver->options);
+    REQUIRE(limited.ok());
+    const ChatteringReport r = detect_chattering(limited, p);
+    INFO(r.message << "; T = " << limited.duration_s << " s against " << pure.duration_s << " s");
+    CHECK(limited.duration_s >= pure.duration_s);  // a constraint more: never faster
+  }
+  SECTION("the shipped design") {
+    const TrajoptResult shipped = solve_maneuver(body, d.maneuver->problem, d.maneuver->options);
+    REQUIRE(shipped.ok());
+    CHECK(!detect_chattering(shipped, d.maneuver->problem).flagged);
+  }
+}
+
+TEST_CASE("started from the NLopt switch-time design, the optimizer still finds the shorter rotation",
+          "[trajopt][slow]") {
+  // The NLopt design (control/switch_time.hpp) stops at a longer time than the optimum
+  // (issue 16 quotes its 1.0378 s and 1.2386 s at NOA 6 as the answer). Started from the
+  // NLopt switches, the optimizer leaves them for the shorter bang-bang rotation, which
+  // the switch-time equations (Newton, first-order simulations) confirm as a root.
+  const FlexibleBody body = hub_body(4);
+  const double rotation = 3.0;
+  for (int k : {1, 2}) {
+    const SwitchTimeResult nlopt = design_switch_times(body, 0, rotation, 1.0, k);
+    REQUIRE(nlopt.ok());
+    const ManeuverProblem p = min_time_rotation(rotation, k, nlopt.duration_s);
+    TrajoptOptions o = rotation_options();
+    const std::vector<double> s = nlopt.switch_times;
+    o.guess.control = [s](double t) {
+      double sign = 1.0;
+      for (double ts : s) sign = t >= ts ? -sign : sign;
+      return Eigen::VectorXd::Constant(1, sign);
+    };
+    o.guess.rollout = true;
+    const TrajoptResult r = solve_maneuver(body, p, o);
+    REQUIRE(r.ok());
+    const std::vector<double> sw = switch_times(r, 200000);
+    REQUIRE(sw.size() == s.size());  // the same bang-bang structure, 2k + 1 switches
+    double T = r.duration_s;
+    newton_switch_times(body, rotation, k, sw, T);
+    INFO(std::setprecision(9) << "k = " << k << ": optimizer T = " << r.duration_s << " s from the NLopt design's "
+                              << nlopt.duration_s << " s; switch-time equations " << T << " s");
+    CHECK(std::abs(r.duration_s - T) < 1e-4 * T);  // as in the test above (measured ~1e-5)
+    CHECK(r.duration_s < 0.99 * nlopt.duration_s);  // measured 1.00076 against 1.0376 s (k = 1), 1.1148 s (k = 2)
+  }
+}
