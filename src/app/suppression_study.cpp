@@ -161,6 +161,8 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   SuppressionOptions options;
   options.simulation = comparison_options(design);
   options.tvlqr.grid_step_s = st.grid_step_s;
+  options.closed_loop.rtol = st.closed_loop_rtol;
+  options.closed_loop.atol = st.closed_loop_atol;
   std::unique_ptr<ProgressReport> report;
   r.chain = suppress_vibration(body, problem, with_progress(options, log, report));
   const SuppressionResult& chain = r.chain;

@@ -116,6 +116,8 @@ void read_damping(Section& root, Design& d);
 void read_simulation(Section& root, Design& d, Outputs& outputs);
 void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
 void read_controller(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
+/// [export] (after [controller], which it needs).
+void read_export(Section& root, Design& d, Outputs& outputs);
 void read_bang_bang(Section& root, Design& d, Outputs& outputs, const Problems& problems,
                     const std::vector<std::string>& rejected);
 
