@@ -83,7 +83,11 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
   st.closed_loop_atol = c.number("closed_loop_atol", tolerance, false).value_or(st.closed_loop_atol);
   c.finish();
   outputs.named(c, "figure", st.figure, {".gp", ".png"});
+  outputs.named(c, "figure", st.figure + "_commands", {".gp", ".png"});
   outputs.fixed("[controller]", "comparison.csv");
+  for (const char* cs : {"open_loop", "tvlqr"})
+    for (const char* model : {"first_order", "nonlinear"})
+      outputs.fixed("[controller]", std::string("commands_") + cs + "_" + model + ".csv");
   for (const char* cs : {"open_loop", "tvlqr"})
     for (const char* model : {"first_order", "nonlinear"})
       outputs.fixed("[controller]", std::string("case_") + cs + "_" + model + ".csv");
