@@ -255,7 +255,7 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     const std::string style = c.model == "nonlinear" ? "lines" : "lines dt 2";
     fig.panels[0].series.push_back({file, 1, 3, label, style});
     std::ostringstream energy_label;  // what the figure shows: the energy each case leaves
-    energy_label << label << ": " << std::setprecision(3) << m.residual_vibration_energy_J << " J at the end";
+    energy_label << label << " " << std::setprecision(3) << m.residual_vibration_energy_J << " J";
     fig.panels[1].series.push_back({file, 1, 4, energy_label.str(), style});
   }
   out.write("comparison.csv", csv.str());
