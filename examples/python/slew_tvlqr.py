@@ -43,7 +43,8 @@ def slew_chain():
 
 def main(out):
     body, slew, opt, law, closed, _ = slew_chain()
-    print(f"slew: {opt.status}, J = {opt.objective:.4f} N^2 s; TV-LQR {law.message}; closed loop {closed.message}")
+    print(f"slew: {opt.status}, J = {opt.objective:.4f} N^2 s; TV-LQR {law.message}; closed loop "
+          f"{'completed' if closed.ok else closed.message}")
     # open loop on the full model: the slew's commands alone (suppress_vibration's open loop)
     p = ff.SuppressionProblem()
     p.maneuver, p.actuators, p.limits = ff.flown_maneuver(opt, slew), [0, 1], [1.0, 1.0]
@@ -57,7 +58,7 @@ def main(out):
         e = ff.vibration_energy(body, z, zd)
         tip = ff.tip_deflection(body, z)[:, 1]
         ax[0].plot(t, tip, label=name)
-        ax[1].semilogy(t, np.maximum(e, 1e-16), label=name)
+        ax[1].semilogy(t, np.where(e > 0, e, np.nan), label=name)  # at rest at t = 0: no energy to draw
         print(f"{name:10s} E_vib(5 s) = {e[-1]:.3e} J")
     for k, lbl in enumerate(["left", "right"]):
         ax[2].plot(closed.t, closed.commands[:, k], label=f"TV-LQR, thruster {lbl}")
