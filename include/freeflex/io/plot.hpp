@@ -21,7 +21,7 @@ struct PlotPanel {
   /// Horizontal reference lines (e.g. actuator limits), drawn dashed and titled
   /// `hline_title`; with any, the y range is widened to show them with a margin, so
   /// that a command at its limit is not clipped by the axis.
-  std::vector<double> hlines;
+  std::vector<double> hlines{};
   std::string hline_title = "limit";
 };
 
