@@ -64,6 +64,8 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
   outputs.named(s, "elastic_figure", st.elastic_figure, {".gp", ".png"});
   if (st.nonlinear) outputs.fixed("[simulation]", "nonlinear.csv");
   if (st.perturbation) outputs.fixed("[simulation]", "perturbation.csv");
+  for (const char* f : {"vibration.gp", "vibration.png"})
+    outputs.fixed("[simulation]", f);
   // a [[load]] that has problems of its own is not missing as well
   if (!root.has("load") && !root.has("maneuver"))
     s.problem("duration_s", "[simulation] needs at least one [[load]] or a [maneuver] to respond to");
