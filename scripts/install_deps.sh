@@ -15,7 +15,8 @@ SUDO=""
 if [[ $(id -u) != 0 ]]; then SUDO="sudo"; fi
 
 packages=(build-essential cmake pkg-config dpkg-dev libeigen3-dev coinor-libipopt-dev libnlopt-cxx-dev
-          libsundials-dev catch2 libtomlplusplus-dev nlohmann-json3-dev libcli11-dev gnuplot-nox)
+          libsundials-dev catch2 libtomlplusplus-dev nlohmann-json3-dev libcli11-dev gnuplot-nox
+          libmatio-dev pybind11-dev python3-dev python3-numpy python3-scipy python3-matplotlib python3-pytest)
 if [[ "${FREEFLEX_WITH_BENCH:-0}" == 1 ]]; then packages+=(libbenchmark-dev); fi
 missing=()
 for p in "${packages[@]}"; do

@@ -2,6 +2,7 @@
 // the study, trajectory.csv with its figures and Ipopt's log, and its summary entry. It
 // hands [simulation] and [controller] the maneuver to fly.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <iomanip>
 
@@ -124,6 +125,15 @@ void write_maneuver(const Design& design, const ManeuverStudyResult& r, RunOutpu
   PlotSpec controls{"maneuver_controls", "Actuator commands: " + design.title, {{"commands", "t [s]", "u [N or N m]", {}}}};
   for (int a = 0; a < nu; ++a)
     controls.panels[0].series.push_back({"trajectory.csv", 1, 8 + a, st.actuator_names[a], "linespoints pt 7 ps 0.4"});
+  // the bounds the optimizer was given, so that a command at its limit shows as one
+  for (const Eigen::VectorXd* b : {&st.problem.u_min, &st.problem.u_max})
+    for (Eigen::Index a = 0; a < b->size(); ++a)
+      if (std::isfinite((*b)(a)) &&
+          std::find(controls.panels[0].hlines.begin(), controls.panels[0].hlines.end(), (*b)(a)) ==
+              controls.panels[0].hlines.end())
+        controls.panels[0].hlines.push_back((*b)(a));
+  controls.panels[0].hline_title = "command limits";
+  if (!controls.panels[0].hlines.empty()) controls.title += " (dotted: the limits)";
   out.plot(controls, design.plots);
 }
 

@@ -53,6 +53,7 @@ void run_studies(const Design& design, const RunOptions& options, RunResult& run
   if (design.controller && flown) {
     run.suppression = run_suppression_study(design, maneuver, study_log);
     detail::write_suppression(design, *run.suppression, out);
+    detail::write_export(design, *run.suppression, out);
     note(run, *run.suppression);
     any = true;
   }

@@ -2,6 +2,8 @@
 // (app/run_output.hpp).
 #include "app/run_output.hpp"
 
+#include <cstdio>
+
 #include "freeflex/io/output.hpp"
 
 namespace freeflex::detail {
@@ -20,6 +22,22 @@ void RunOutput::stream(const std::string& name, const std::function<void(std::os
     write_file_atomic(dir_ + "/" + name, writer);
   } catch (const IoError& e) {
     throw IoError(shown(e.what()));  // the staging directory is gone once the run ends
+  }
+  files_.push_back(name);
+}
+
+void RunOutput::file(const std::string& name, const std::function<void(const std::string& path)>& writer) {
+  if (dir_.empty()) return;
+  const std::string path = dir_ + "/" + name, tmp = dir_ + "/." + name + ".partial";
+  try {
+    writer(tmp);
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+      std::remove(tmp.c_str());
+      throw IoError("cannot rename '" + tmp + "' to '" + path + "'");
+    }
+  } catch (const IoError& e) {
+    std::remove(tmp.c_str());
+    throw IoError(shown(e.what()));
   }
   files_.push_back(name);
 }

@@ -25,6 +25,9 @@ class RunOutput {
         plot_(std::move(plot)) {}
   void write(const std::string& name, const std::string& content);
   void csv(const std::string& name, const std::vector<std::string>& header, const Eigen::MatrixXd& data);
+  /// A file a library writes by path (a .mat file): `writer` writes a temporary path in
+  /// dir(), which is then renamed to `name` and counted among the run's files.
+  void file(const std::string& name, const std::function<void(const std::string& path)>& writer);
   /// Renders a plot (unless plots are off); a failure becomes a warning, not an error.
   void plot(const PlotSpec& spec, bool enabled);
   void warn(const std::string& message);

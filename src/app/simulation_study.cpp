@@ -2,6 +2,7 @@
 // solution (zero-order then first-order), their differences, energies and momenta (the
 // paper's Figs. 4-7): the study, nonlinear.csv and perturbation.csv with their figures,
 // and its summary entry.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iomanip>
@@ -422,6 +423,36 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
         elastic.panels.push_back({q, "t [s]", q, series(5 + i, "")});
       }
     if (!elastic.panels.empty()) out.plot(elastic, design.plots);
+
+    // what an engineer checks first: the tips' deflection and the vibration energy
+    // (columns of nonlinear.csv and perturbation.csv)
+    PlotSpec vib{"vibration", "Tip deflection and vibration energy: " + design.title,
+                 {{"tip deflection, left end", "t [s]", "w(left) [m]", {}},
+                  {"tip deflection, right end", "t [s]", "w(right) [m]", {}},
+                  {"vibration energy (log scale)", "t [s]", "E_vib [J]", {}, true}}};
+    std::string energy_note;
+    for (const auto* sol : {&r.nonlinear, &r.perturbation}) {
+      if (!*sol || !(*sol)->run.ok()) continue;
+      const std::vector<std::string>& header = (*sol)->header;
+      const auto col = [&](const char* name) {
+        return static_cast<int>(std::find(header.begin(), header.end(), name) - header.begin()) + 1;
+      };
+      const int tl = col("tip_left_m"), energy = col("vibration_energy_J");
+      if (energy > static_cast<int>(header.size())) continue;
+      const bool full = sol == &r.nonlinear;
+      const std::string file = full ? "nonlinear.csv" : "perturbation.csv";
+      const std::string label = full ? "full nonlinear" : "perturbation";
+      const std::string style = full ? "lines" : "lines dt 2";
+      vib.panels[0].series.push_back({file, 1, tl, label, style});
+      vib.panels[1].series.push_back({file, 1, tl + 1, label, style});
+      vib.panels[2].series.push_back({file, 1, energy, label, style});
+      std::ostringstream note;
+      note << (energy_note.empty() ? "; at the end: " : ", ") << label << " " << std::setprecision(3)
+           << (*sol)->table(((*sol)->table.rows() - 1), energy - 1) << " J";
+      energy_note += note.str();
+    }
+    vib.panels[2].title += energy_note;
+    out.plot(vib, design.plots);
   }
 }
 

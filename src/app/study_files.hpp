@@ -28,6 +28,8 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
 Json to_json(const SimulationStudyResult& r);
 
 void write_suppression(const Design& design, const SuppressionStudyResult& r, RunOutput& out);
+/// [export]: NAME.mat and NAME_*.csv (nothing without [export]).
+void write_export(const Design& design, const SuppressionStudyResult& r, RunOutput& out);
 /// Empty (null) when the study has no entry (its open loop failed: the run's message says why).
 Json to_json(const Design& design, const SuppressionStudyResult& r);
 

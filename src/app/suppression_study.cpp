@@ -163,6 +163,8 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   SuppressionOptions options;
   options.simulation = comparison_options(design);
   options.tvlqr.grid_step_s = st.grid_step_s;
+  options.closed_loop.rtol = st.closed_loop_rtol;
+  options.closed_loop.atol = st.closed_loop_atol;
   std::unique_ptr<ProgressReport> report;
   r.chain = suppress_vibration(body, problem, with_progress(options, log, report));
   const SuppressionResult& chain = r.chain;
@@ -249,7 +251,7 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
          "final_attitude_error_rad,control_effort_N2s,peak_command,saturated_fraction,mean_vibration_energy_J\n";
   PlotSpec fig{st.figure, "Vibration suppression: " + design.title,
                {{"tip deflection (right end)", "t [s]", "deflection [m]", {}},
-                {"vibration energy (log scale: feedback leaves orders of magnitude less)", "t [s]", "E_vib [J]", {}, true}}};
+                {"vibration energy (log scale; the key gives each case's energy at t = " + num(st.simulate_until_s) + " s)", "t [s]", "E_vib [J]", {}, true}}};
   const Eigen::RowVectorXd phi_l = body.basis().value(body.beam().x_left());
   const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
   const int n = body.n();
@@ -273,10 +275,42 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     const std::string label = c.name + " (" + c.model + ")";
     const std::string style = c.model == "nonlinear" ? "lines" : "lines dt 2";
     fig.panels[0].series.push_back({file, 1, 3, label, style});
-    fig.panels[1].series.push_back({file, 1, 4, label, style});
+    std::ostringstream energy_label;  // what the figure shows: the energy each case leaves
+    energy_label << label << " " << std::setprecision(3) << m.residual_vibration_energy_J << " J";
+    fig.panels[1].series.push_back({file, 1, 4, energy_label.str(), style});
   }
   out.write("comparison.csv", csv.str());
   out.plot(fig, design.plots);
+
+  // the commands of the feedback actuators against their limits: open loop (the nominal
+  // commands) and under the TV-LQR
+  PlotSpec cmd{st.figure + "_commands", "Feedback actuators' commands, open loop and under TV-LQR: " + design.title, {}};
+  const std::vector<ForceElement> elements = design.force_elements();
+  for (std::size_t k = 0; k < st.actuators.size(); ++k) {
+    PlotPanel p{st.actuator_names[k] + " (element " + std::to_string(st.actuators[k]) + ")", "t [s]",
+                "command [N or N m]", {}};
+    if (std::isfinite(st.limits(static_cast<Eigen::Index>(k)))) {
+      p.hlines = {-st.limits(static_cast<Eigen::Index>(k)), st.limits(static_cast<Eigen::Index>(k))};
+      p.hline_title = "limits";
+    }
+    cmd.panels.push_back(p);
+  }
+  for (const auto& c : r.cases) {
+    if (c.name != "open_loop" && c.name != "tvlqr") continue;
+    Eigen::MatrixXd h(c.t.size(), 1 + static_cast<Eigen::Index>(st.actuators.size()));
+    h.col(0) = c.t;
+    std::vector<std::string> header{"t"};
+    for (std::size_t k = 0; k < st.actuators.size(); ++k) {
+      h.col(1 + static_cast<Eigen::Index>(k)) = c.commands.col(st.actuators[k]);
+      header.push_back(st.actuator_names[k]);
+    }
+    const std::string file = "commands_" + c.name + "_" + c.model + ".csv";
+    out.csv(file, header, h);
+    for (std::size_t k = 0; k < st.actuators.size(); ++k)
+      cmd.panels[k].series.push_back({file, 1, 2 + static_cast<int>(k), c.name + " (" + c.model + ")",
+                                      c.model == "nonlinear" ? "lines" : "lines dt 2"});
+  }
+  out.plot(cmd, design.plots);
 }
 
 Json to_json(const Design& design, const SuppressionStudyResult& r) {

@@ -108,6 +108,7 @@ SuppressionResult suppress_vibration(const FlexibleBody& body, const Suppression
   }
   if (!nominal) nominal = res.open_loop_first_order.nominal;
   res.nominal = nominal;
+  res.u0 = u0 ? u0 : [](const Instant&, Eigen::Ref<Eigen::VectorXd> u) { u.setZero(); };
   sim_p.integrator.progress = [&](double t) { progress(SuppressionPhase::OpenLoop, sim.duration_s + t); };
   res.open_loop_full = simulate_full(body, nominal_ex, sim_p);
   if (!res.open_loop_full.ok()) {

@@ -85,6 +85,7 @@ Design parse_design(const std::string& text, const std::string& source) {
   io_detail::read_controller(root, d, outputs, rejected_actuators);
   io_detail::read_bang_bang(root, d, outputs, problems, rejected_actuators);
   io_detail::read_sensors_lqg_sweep(root, d, outputs);
+  io_detail::read_export(root, d, outputs);
   root.finish();
   outputs.check(problems);
   if (problems.empty()) {

@@ -86,9 +86,16 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
   auto until = c.number("simulate_until_s", kTime, false);
   st.simulate_until_s = until.value_or(st.horizon_s);
   if (auto name = c.string("figure", false, true)) st.figure = *name;
+  const Range tolerance = Range::positive().supported(1e-16, 1.0);
+  st.closed_loop_rtol = c.number("closed_loop_rtol", tolerance, false).value_or(st.closed_loop_rtol);
+  st.closed_loop_atol = c.number("closed_loop_atol", tolerance, false).value_or(st.closed_loop_atol);
   c.finish();
   outputs.named(c, "figure", st.figure, {".gp", ".png"});
+  outputs.named(c, "figure", st.figure + "_commands", {".gp", ".png"});
   outputs.fixed("[controller]", "comparison.csv");
+  for (const char* cs : {"open_loop", "tvlqr"})
+    for (const char* model : {"first_order", "nonlinear"})
+      outputs.fixed("[controller]", std::string("commands_") + cs + "_" + model + ".csv");
   for (const char* cs : {"open_loop", "tvlqr"})
     for (const char* model : {"first_order", "nonlinear"})
       outputs.fixed("[controller]", std::string("case_") + cs + "_" + model + ".csv");

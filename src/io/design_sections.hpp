@@ -125,6 +125,8 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
 void read_controller(Section& root, Design& d, Outputs& outputs, const std::vector<std::string>& rejected);
 /// [[sensor]], [lqg] and [sweep] (io/design_sweep.cpp), after [controller].
 void read_sensors_lqg_sweep(Section& root, Design& d, Outputs& outputs);
+/// [export] (after [controller], which it needs).
+void read_export(Section& root, Design& d, Outputs& outputs);
 void read_bang_bang(Section& root, Design& d, Outputs& outputs, const Problems& problems,
                     const std::vector<std::string>& rejected);
 

@@ -72,6 +72,8 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
     outputs.fixed("[simulation]", d.geometric_stiffening ? "nonlinear_stiffening_off.csv" : "nonlinear_stiffening_on.csv");
     outputs.named(s, "tip_figure", st.tip_figure, {".gp", ".png"});
   }
+  for (const char* f : {"vibration.gp", "vibration.png"})
+    outputs.fixed("[simulation]", f);
   // a [[load]] that has problems of its own is not missing as well
   if (!root.has("load") && !root.has("maneuver") && !root.has("motion"))
     s.problem("duration_s", "[simulation] needs at least one [[load]], a [maneuver] or a [motion] to respond to");

@@ -3,6 +3,7 @@
 #include "freeflex/io/plot.hpp"
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
@@ -94,13 +95,28 @@ PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotO
   for (const auto& p : spec.panels) {
     if (panels > 1) gp << "set title " << quoted(p.title) << "\n";
     gp << (p.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '% h'\n");
-    gp << "set xlabel " << quoted(p.xlabel) << "\nset ylabel " << quoted(p.ylabel) << "\nplot ";
+    gp << "set xlabel " << quoted(p.xlabel) << "\nset ylabel " << quoted(p.ylabel) << "\n";
+    if (!p.hlines.empty()) {
+      // the data's range and the lines', with 10% of the larger span as margin
+      gp << "set autoscale y\nstats_lo = " << std::min(0.0, *std::min_element(p.hlines.begin(), p.hlines.end()))
+         << "\nstats_hi = " << std::max(0.0, *std::max_element(p.hlines.begin(), p.hlines.end())) << "\n";
+      for (const auto& s : p.series)
+        gp << "stats " << quoted(s.data_file) << " skip 1 using " << s.y_column
+           << " nooutput\nstats_lo = (STATS_min < stats_lo) ? STATS_min : stats_lo\n"
+              "stats_hi = (STATS_max > stats_hi) ? STATS_max : stats_hi\n";
+      gp << "stats_pad = 0.1 * (stats_hi - stats_lo + 1e-12)\nset yrange [stats_lo - stats_pad : stats_hi + stats_pad]\n";
+    }
+    gp << "plot ";
     for (std::size_t i = 0; i < p.series.size(); ++i) {
       const auto& s = p.series[i];
       gp << (i ? ", \\\n     " : "") << quoted(s.data_file) << " skip 1 using " << s.x_column << ":" << s.y_column
          << " with " << s.style << " lw 2 title " << quoted(s.title);
     }
+    for (std::size_t i = 0; i < p.hlines.size(); ++i)
+      gp << ", \\\n     " << p.hlines[i] << " with lines dt 3 lw 1.5 lc rgb 'black' title "
+         << quoted(i == 0 ? p.hline_title : "");
     gp << "\n";
+    if (!p.hlines.empty()) gp << "set autoscale y\n";
   }
   if (panels > 1) gp << "unset multiplot\n";
   write_file_atomic(dir + "/" + spec.name + ".gp", gp.str());

@@ -77,6 +77,9 @@ struct SuppressionResult {
   bool ok() const { return status == Status::Solved; }
 
   std::shared_ptr<const RigidTrajectory> nominal;  ///< the motion the controller is built about
+  /// The nominal commands u0(t) of the feedback actuators (the maneuver's, zero after it
+  /// and without one), as the closed loops add them to the feedback.
+  ActuatorCommandFunction u0;
   PerturbationResult open_loop_first_order;        ///< open loop, perturbation solution
   SimulationResult open_loop_full;                 ///< open loop, full model
   TvlqrResult law;

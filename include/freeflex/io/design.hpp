@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "freeflex/control/lqg.hpp"
+#include "freeflex/control/closed_loop.hpp"
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/dynamics/flexible_body.hpp"
 #include "freeflex/model/beam.hpp"
@@ -164,6 +165,21 @@ struct ControllerStudy {
   double grid_step_s = TvlqrOptions{}.grid_step_s;  ///< spacing of the stored gains
   double simulate_until_s = 0.0;    ///< end of the comparison runs (0: the horizon)
   std::string figure = "comparison";
+  /// CVODES tolerances of the closed-loop runs (defaults: closed_loop_integrator()).
+  double closed_loop_rtol = closed_loop_integrator().rtol;
+  double closed_loop_atol = closed_loop_integrator().atol;
+};
+
+/// [export]: what the controller study leaves for other tools (README, outputs): files
+/// NAME.mat (MATLAB level 5, readable by scipy.io.loadmat and Octave) and/or NAME_*.csv.
+struct ExportRequest {
+  std::string name = "controller";  ///< stem of the exported files
+  bool csv = true, mat = true;      ///< formats
+  /// What: the TV-LQR gains and feedforward, the nominal x0(t), u0(t), the first-order
+  /// model A(t), B(t), g(t), the frozen-time poles of A and A - BK, every comparison
+  /// case's histories.
+  bool gains = true, nominal = true, model = true, poles = true, histories = true;
+  double model_step_s = 0.0;  ///< spacing of the model grid [s] (0: the TV-LQR gain grid's)
 };
 
 /// [bang_bang]: rest-to-rest bang-bang rotations by one torque actuator at o whose switch
@@ -235,6 +251,7 @@ struct Design {
   std::vector<Sensor> sensors;  ///< [[sensor]]
   std::optional<LqgStudy> lqg;
   std::optional<SweepStudy> sweep;
+  std::optional<ExportRequest> exports;  ///< [export] (needs [controller])
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;

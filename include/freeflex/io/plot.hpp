@@ -25,6 +25,11 @@ struct PlotPanel {
   std::string title, xlabel, ylabel;
   std::vector<PlotSeries> series;
   bool log_y = false;  ///< logarithmic y axis (points <= 0 are left out by gnuplot)
+  /// Horizontal reference lines (e.g. actuator limits), drawn dashed and titled
+  /// `hline_title`; with any, the y range is widened to show them with a margin, so
+  /// that a command at its limit is not clipped by the axis.
+  std::vector<double> hlines{};
+  std::string hline_title = "limit";
 };
 
 struct PlotSpec {

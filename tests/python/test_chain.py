@@ -1,0 +1,67 @@
+"""From Python only: the minimum-energy slew of designs/suppress_slew.toml, the TV-LQR
+about it and the closed loop on the full nonlinear model, built step by step from the
+module's calls, give the numbers `freeflex run` gives for the design (its .mat export)."""
+import importlib.util
+import os
+import subprocess
+import sys
+
+import numpy as np
+import scipy.io
+
+import freeflex as ff
+from conftest import SOURCE, run_cli, slew_design
+
+
+def python_chain():
+    """examples/python/slew_tvlqr.py's chain."""
+    spec = importlib.util.spec_from_file_location("slew_tvlqr", SOURCE / "examples" / "python" / "slew_tvlqr.py")
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    _, _, opt, law, closed, first = example.slew_chain()
+    assert opt.ok, opt.message
+    assert law.ok, law.message
+    return opt, law, closed, first
+
+
+def test_python_chain_equals_freeflex_run(tmp_path):
+    design = slew_design(tmp_path, export='formats = ["mat"]\ncontents = ["gains", "histories"]')
+    run_cli(design, tmp_path / "out")
+    d = scipy.io.loadmat(tmp_path / "out" / "controller.mat")
+    opt, law, closed, first = python_chain()
+    assert abs(opt.objective - 0.9233) < 1e-3  # the energy optimum of examples/optimal_slew.cpp
+    worst = {
+        "K": np.abs(law.K - np.moveaxis(d["K"], 2, 0)).max(),
+        "u_ff": np.abs(law.feedforward - d["u_ff"]).max(),
+        "full z": np.abs(closed.z - d["tvlqr_nonlinear_z"]).max(),
+        "full z_dot": np.abs(closed.z_dot - d["tvlqr_nonlinear_z_dot"]).max(),
+        "full commands": np.abs(closed.commands - d["tvlqr_nonlinear_u"]).max(),
+        "first-order z": np.abs(first.z - d["tvlqr_first_order_z"]).max(),
+    }
+    print("Python chain vs freeflex run, max |difference|:", worst)
+    assert np.array_equal(closed.t, d["tvlqr_nonlinear_t"].ravel())
+    # the same library calls with the same inputs: measured 0 (bit for bit); 1e-12 is the
+    # acceptance bound
+    for what, diff in worst.items():
+        assert diff <= 1e-12, what
+
+
+def test_one_call_chain_and_design_run_agree(tmp_path):
+    design = ff.load_design(str(slew_design(tmp_path)))
+    run = ff.run(design)
+    assert run.ok, run.message
+    cases = {(c.name, c.model): c for c in run.suppression.cases}
+    full = cases[("tvlqr", "nonlinear")]
+    _, _, closed, _ = python_chain()
+    assert np.array_equal(full.z, closed.z)  # same calls, same numbers: measured bit for bit
+    s = ff.summary(design, run)
+    assert s["studies"]["suppression"]["cases"][3]["case"] == "tvlqr"
+
+
+def test_example_script_makes_its_figure(tmp_path):
+    png = tmp_path / "slew.png"
+    p = subprocess.run([sys.executable, str(SOURCE / "examples" / "python" / "slew_tvlqr.py"), str(png)],
+                       capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert p.returncode == 0, p.stderr
+    assert png.stat().st_size > 10000
+    assert "TV-LQR" in p.stdout
