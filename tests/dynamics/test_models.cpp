@@ -45,10 +45,7 @@ TEST_CASE("first-order A(t), B(t) match central differences of the full model", 
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   for (int trial = 0; trial < 25; ++trial) {
-    RigidState s;
-    s.pos = Eigen::Vector3d(U(rng), U(rng), 3.0 * U(rng));
-    s.vel = Eigen::Vector3d(U(rng), U(rng), 4.0 * U(rng));
-    s.acc = Eigen::Vector3d(U(rng), U(rng), 5.0 * U(rng));
+    const RigidState s = freeflex_test::random_rigid_state(rng, U);
     Eigen::VectorXd u0(ne);
     for (int e = 0; e < ne; ++e) u0(e) = 2.0 * U(rng);
     const FixedTrajectory traj(s);
@@ -180,10 +177,7 @@ TEST_CASE("first-order rhs (term by term) equals A x1 + B u1 + g", "[dynamics]")
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
-    RigidState s;
-    s.pos = Eigen::Vector3d(U(rng), U(rng), 3.0 * U(rng));
-    s.vel = Eigen::Vector3d(U(rng), U(rng), 4.0 * U(rng));
-    s.acc = Eigen::Vector3d(U(rng), U(rng), 5.0 * U(rng));
+    const RigidState s = freeflex_test::random_rigid_state(rng, U);
     Eigen::VectorXd u0(ne), u1(3), x1(2 * N);
     for (int e = 0; e < ne; ++e) u0(e) = U(rng);
     for (int k = 0; k < 3; ++k) u1(k) = U(rng);

@@ -256,10 +256,7 @@ TEST_CASE("prescribed motion: the q rows of the full model, and first order give
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   for (int trial = 0; trial < 10; ++trial) {
-    RigidState s;
-    s.pos = Eigen::Vector3d(U(rng), U(rng), 3.0 * U(rng));
-    s.vel = Eigen::Vector3d(U(rng), U(rng), 4.0 * U(rng));
-    s.acc = Eigen::Vector3d(U(rng), U(rng), 5.0 * U(rng));
+    const RigidState s = freeflex_test::random_rigid_state(rng, U);
     Eigen::VectorXd u(3), xq(2 * n);
     for (int e = 0; e < 3; ++e) u(e) = U(rng);
     for (int i = 0; i < 2 * n; ++i) xq(i) = 0.2 * U(rng);

@@ -1,5 +1,6 @@
 #pragma once
 // A rigid trajectory that stays at one state: a linearization point for the first-order model.
+#include <random>
 #include <vector>
 
 #include "freeflex/dynamics/zero_order.hpp"
@@ -18,5 +19,15 @@ class FixedTrajectory : public freeflex::RigidTrajectory {
  private:
   freeflex::RigidState s_;
 };
+
+/// A rigid state drawn from U(-1, 1): positions, rates and accelerations, the angle's
+/// three components scaled by 3, 4 and 5 (the draws in a fixed order).
+inline freeflex::RigidState random_rigid_state(std::mt19937& rng, std::uniform_real_distribution<double>& U) {
+  freeflex::RigidState s;
+  s.pos = Eigen::Vector3d(U(rng), U(rng), 3.0 * U(rng));
+  s.vel = Eigen::Vector3d(U(rng), U(rng), 4.0 * U(rng));
+  s.acc = Eigen::Vector3d(U(rng), U(rng), 5.0 * U(rng));
+  return s;
+}
 
 }  // namespace freeflex_test
