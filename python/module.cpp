@@ -226,6 +226,11 @@ PYBIND11_MODULE(_freeflex, m) {
           "transcription", [](const TrajoptOptions& o) { return std::string(to_string(o.transcription)); },
           [](TrajoptOptions& o, const std::string& s) {
             o.transcription = enum_from<Transcription>("transcription", s);
+          })
+      .def_property(
+          "linear_solver", [](const TrajoptOptions& o) { return std::string(to_string(o.linear_solver)); },
+          [](TrajoptOptions& o, const std::string& s) {
+            o.linear_solver = enum_from<LinearSolver>("linear_solver", s);
           });
   py::class_<SuppressionOptions>(m, "SuppressionOptions")
       .def(py::init<>())

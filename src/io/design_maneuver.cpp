@@ -79,10 +79,10 @@ void read_ipopt_options(Section& m, ManeuverStudy& st, Outputs& outputs, int noa
       ip.problem(key, why.rfind("must", 0) == 0 ? lead + ", " + why : lead + " " + why);
       continue;
     }
-    // Debian's Ipopt is built with MUMPS only: any other solver makes Ipopt abort the
-    // whole process (it tries to load libhsl.so)
-    if (key == "linear_solver" && lower_trimmed(value) != "mumps") {
-      ip.problem(key, lead + ", must be \"mumps\" (the only linear solver this Ipopt has)");
+    // the factorization is freeflex's choice ([maneuver] linear_solver): any other Ipopt
+    // solver makes Debian's Ipopt abort the whole process (it tries to load libhsl.so)
+    if (key == "linear_solver") {
+      ip.problem(key, lead + ": choose the factorization with maneuver.linear_solver = \"ldlt\" or \"mumps\"");
       continue;
     }
     if (key == "linear_system_scaling" && lower_trimmed(value) == "mc19") {
@@ -251,6 +251,7 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   report_field_problems(m, problems(p, static_cast<int>(d.loads.size() + d.actuators.size())), keys);
 
   o.transcription = m.enumerated<Transcription>("transcription", false).value_or(o.transcription);
+  o.linear_solver = m.enumerated<LinearSolver>("linear_solver", false).value_or(o.linear_solver);
   o.intervals = static_cast<int>(m.integer("intervals", 1, lim::kMaxIntervals, false).value_or(o.intervals));
   o.mesh_refinements =
       static_cast<int>(m.integer("mesh_refinements", 0, lim::kMaxMeshRefinements, false).value_or(o.mesh_refinements));

@@ -86,6 +86,7 @@ TEST_CASE("every public enum round-trips through its names", "[api]") {
   check_names<IntegrationStatus>();
   check_names<SimulationOptions::Variables>();
   check_names<Transcription>();
+  check_names<LinearSolver>();
   check_names<TrajoptStatus>();
   check_names<CareResult::Status>();
   check_names<TvlqrResult::Status>();
@@ -110,6 +111,10 @@ TEST_CASE("enum names are the spellings design files take", "[api][io]") {
   for (const auto& [value, name] : EnumNames<Transcription>::names) {
     const Design d = parse_design(kBeam + actuators + "transcription = \"" + name + "\"\n", "t.toml");
     CHECK(d.maneuver->options.transcription == value);
+  }
+  for (const auto& [value, name] : EnumNames<LinearSolver>::names) {
+    const Design d = parse_design(kBeam + actuators + "linear_solver = \"" + name + "\"\n", "t.toml");
+    CHECK(d.maneuver->options.linear_solver == value);
   }
   const std::string load = "[[load]]\nname = \"F\"\ntype = \"torque\"\nposition_m = 0.5\n[load.profile]\n";
   for (const auto& [value, name] : EnumNames<TimeProfile::Kind>::names) {
