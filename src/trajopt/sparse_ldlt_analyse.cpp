@@ -197,40 +197,73 @@ LdltSymbolic ldlt_analyse(int n, long long nz, const int* rows, const int* cols,
     return t;
   };
 
-  // Relaxed amalgamation, children first: merge t into its parent when t is the subtree
-  // just before it (its last child) and the merged front holds few explicit zeros
-  // (CHOLMOD's default rule: any merge up to 4 columns, up to 80% zeros to 16 columns, 10%
-  // to 48, 5% beyond).
+  // Relaxed amalgamation, children first: merge t into its parent when the merged front
+  // holds few explicit zeros (CHOLMOD's default rule: any merge up to 4 columns, up to 80%
+  // zeros to 16 columns, 10% to 48, 5% beyond; and a child of at most 4 columns up to 50%,
+  // since a front of its own costs more than the zeros). Any child may merge, not only the one just
+  // before its parent: its columns then move next to the parent's (t's rows lie in the
+  // parent's front, so the fill is the same), which gathers the many one- and two-column
+  // leaves of a KKT matrix (slacks, controls) into their parents' fronts.
   std::vector<char> alive(nsn, 1);
+  std::vector<std::vector<int>> members(nsn);
+  for (int t = 0; t < nsn; ++t) members[t] = {t};
+  std::vector<int> merged_cols = ncols;
   for (int t = 0; t < nsn; ++t) {
     if (sn_parent[t] == -1) continue;
     const int p = find(sn_parent[t]);
-    if (start[t] + ncols[t] != start[p]) continue;
-    const long long nc = ncols[t] + ncols[p], m = ncols[t] + front[p];
-    const long long z = entries(nc, m) - entries(ncols[t], front[t]) - entries(ncols[p], front[p]) + zeros[t] + zeros[p];
+    const long long nc = merged_cols[t] + merged_cols[p], m = merged_cols[t] + front[p];
+    const long long z = entries(nc, m) - entries(merged_cols[t], front[t]) - entries(merged_cols[p], front[p]) +
+                        zeros[t] + zeros[p];
     const double frac = static_cast<double>(z) / static_cast<double>(entries(nc, m));
-    const bool merge = nc <= 4 || (nc <= 16 && frac < 0.8) || (nc <= 48 && frac < 0.1) || frac < 0.05;
+    const bool merge = (merged_cols[t] <= 4 && frac < 0.5) || nc <= 4 || (nc <= 16 && frac < 0.8) || (nc <= 48 && frac < 0.1) || frac < 0.05;
     if (!merge) continue;
-    start[p] = start[t];
-    ncols[p] = static_cast<int>(nc);
+    merged_cols[p] = static_cast<int>(nc);
     front[p] = static_cast<int>(m);
     zeros[p] = z;
     alive[t] = 0;
     rep[t] = p;
+    members[p].insert(members[p].end(), members[t].begin(), members[t].end());
+    members[t].clear();
   }
-  std::vector<int> renumber(nsn, -1);
-  for (int t = 0; t < nsn; ++t)
-    if (alive[t]) renumber[t] = static_cast<int>(s.sn_parent.size()), s.sn_parent.push_back(0);
+  // The merged tree in postorder: each node's children, then its members' columns (in
+  // their former order).
+  std::vector<std::vector<int>> kids(nsn);
+  std::vector<int> roots;
   for (int t = 0; t < nsn; ++t) {
     if (!alive[t]) continue;
-    const int me = renumber[t];
-    s.sn_parent[me] = sn_parent[t] == -1 ? -1 : renumber[find(sn_parent[t])];
-    s.sn_start.push_back(start[t]);
-    s.factor_doubles += static_cast<long long>(front[t]) * ncols[t];
-    s.factor_ints += 3 + 2 + front[t] + ncols[t];  // table entry and record (sparse_ldlt_factor.cpp)
-    s.max_front = std::max(s.max_front, front[t]);
+    if (sn_parent[t] == -1)
+      roots.push_back(t);
+    else
+      kids[find(sn_parent[t])].push_back(t);
   }
+  std::vector<int> order, renumber(nsn, -1);
+  order.reserve(n);
+  std::vector<std::pair<int, std::size_t>> stack;
+  for (int root : roots) {
+    stack.emplace_back(root, 0);
+    while (!stack.empty()) {
+      auto& [t, next] = stack.back();
+      if (next < kids[t].size()) {
+        const int child = kids[t][next++];
+        stack.emplace_back(child, 0);
+        continue;
+      }
+      renumber[t] = static_cast<int>(s.sn_start.size());
+      s.sn_start.push_back(static_cast<int>(order.size()));
+      std::sort(members[t].begin(), members[t].end());
+      for (int f : members[t])
+        for (int j = start[f]; j < start[f] + ncols[f]; ++j) order.push_back(s.order[j]);
+      s.factor_doubles += static_cast<long long>(front[t]) * merged_cols[t];
+      s.factor_ints += 3 + 2 + front[t] + merged_cols[t];  // table entry and record (sparse_ldlt_factor.cpp)
+      s.max_front = std::max(s.max_front, front[t]);
+      stack.pop_back();
+    }
+  }
+  s.sn_parent.assign(s.sn_start.size(), -1);
+  for (int t = 0; t < nsn; ++t)
+    if (alive[t] && sn_parent[t] != -1) s.sn_parent[renumber[t]] = renumber[find(sn_parent[t])];
   s.sn_start.push_back(n);
+  s.order = std::move(order);
   s.factor_ints += 4 + n;  // header and order
   ldlt_map_columns(s, nz, rows, cols, base);
   return s;
