@@ -52,40 +52,39 @@ class Front {
   Front(double* F, int m, int q, std::vector<int>& idx, std::vector<int>& kind, std::vector<double>& temp)
       : F_(F), m_(m), q_(q), idx_(idx), kind_(kind), temp_(temp) {}
 
-  /// Pivots are sought in a window of the next kWindow fully summed columns, which each
-  /// pivot updates at once; the columns beyond it get the window's pivots in one product
-  /// when it is used up, or before the search has to look at them.
+  /// Blocked: the 1x1 pivots of a block of up to kBlock columns are taken left-looking
+  /// (each column brought up to date only when its turn comes), and the block's pivots
+  /// reach the columns after it in one product when it is full. A column that fails the
+  /// 1x1 test first brings every fully summed column up to date; the search over them and a
+  /// 2x2 pivot then go right-looking.
   FrontResult factor(double u, bool force) {
     FrontResult res;
-    int k = 0, kb = 0, we = std::min(kWindow, q_);
+    int k = 0, kb = 0;  // the pivots [kb, k) have not reached the columns from k on
     while (k < q_) {
-      if (k >= we) {
-        flush(kb, k, we);
+      if (k - kb == kBlock) {
+        update(kb, k, k, q_);
         kb = k;
-        we = std::min(k + kWindow, q_);
       }
+      if (kb < k) refresh(kb, k);
+      const double d = F(k, k);
+      if (d != 0.0 && std::abs(d) >= u * max_abs(&F(k + 1, k), m_ - k - 1)) {
+        res.negative += d < 0.0 ? 1 : 0;
+        scale_column(k);
+        kind_.push_back(1);
+        k += 1;
+        continue;
+      }
+      if (kb < k) update(kb, k, k + 1, q_);  // column k is already up to date
       int j = -1, r = -1;
-      bool found = find_pivot(k, we, u, j, r);
-      if (found && r >= we) {  // a 2x2 partner beyond the window: bring every column up to date
-        flush(kb, k, we);
-        kb = k;
-        we = q_;
-        found = find_pivot(k, we, u, j, r);
-      }
-      if (!found && we < q_) {
-        flush(kb, k, we);
-        kb = k;
-        we = q_;
-        found = find_pivot(k, we, u, j, r);
-      }
-      if (!found && (!force || !find_forced_pivot(k, j, r))) {
+      if (!find_pivot(k, u, j, r) && (!force || !find_forced_pivot(k, j, r))) {
         res.zero_pivot = force;
+        kb = k;
         break;
       }
       if (r < 0) {
         swap(k, j);
         res.negative += F(k, k) < 0.0 ? 1 : 0;
-        eliminate_1x1(k, we);
+        eliminate_1x1(k);
         kind_.push_back(1);
         k += 1;
       } else {
@@ -93,21 +92,22 @@ class Front {
         swap(k + 1, std::max(j, r));
         const double det = F(k, k) * F(k + 1, k + 1) - F(k + 1, k) * F(k + 1, k);
         res.negative += det < 0.0 ? 1 : (F(k, k) < 0.0 ? 2 : 0);
-        eliminate_2x2(k, we);
-        ++res.blocks_2x2;
+        eliminate_2x2(k);
         kind_.push_back(2);
         kind_.push_back(3);
+        ++res.blocks_2x2;
         k += 2;
       }
+      kb = k;
     }
-    if (we < q_) flush(kb, k, we);
+    if (kb < k) update(kb, k, k, q_);  // the delayed columns
     res.p = k;
     update(0, k, q_);
     return res;
   }
 
  private:
-  static constexpr int kWindow = 16;
+  static constexpr int kBlock = 16;
 
   double& F(int i, int j) { return F_[i + static_cast<std::ptrdiff_t>(j) * m_]; }
   /// Entry (i, j) of the symmetric active matrix, either triangle.
@@ -127,12 +127,11 @@ class Front {
     return g;
   }
 
-  /// MA27's threshold test over the fully summed columns [k, end) in order: a 1x1 pivot j
-  /// with |a_jj| >= u max_i |a_ij|, else a 2x2 with the largest fully summed entry of
-  /// column j whose inverse keeps the growth below 1/u. A partner r at or beyond `end` is
-  /// returned untested (the caller brings its column up to date and asks again).
-  bool find_pivot(int k, int end, double u, int& j, int& r) {
-    for (j = k; j < end; ++j) {
+  /// MA27's threshold test over the fully summed columns in order: a 1x1 pivot j with
+  /// |a_jj| >= u max_i |a_ij|, else a 2x2 with the largest fully summed entry of column j
+  /// whose inverse keeps the growth below 1/u.
+  bool find_pivot(int k, double u, int& j, int& r) {
+    for (j = k; j < q_; ++j) {
       const double ajj = std::abs(F(j, j));
       r = -1;
       if (ajj > 0.0 && ajj >= u * colmax(k, j, -1)) return true;
@@ -140,7 +139,6 @@ class Front {
       for (int i = k; i < q_; ++i)
         if (i != j && std::abs(S(i, j)) > best) best = std::abs(S(i, j)), r = i;
       if (r < 0) continue;
-      if (r >= end) return true;
       const double a = S(j, j), b = S(r, j), c = S(r, r), det = a * c - b * b;
       if (det == 0.0) continue;
       const double gj = colmax(k, j, r), gr = colmax(k, r, j), lim = std::abs(det) / std::max(u, 1e-300);
@@ -181,19 +179,33 @@ class Front {
     std::swap(idx_[a], idx_[b]);
   }
 
-  /// Pivot k: updates the window's columns (k, we), then stores L's column.
-  void eliminate_1x1(int k, int we) {
-    const double d = F(k, k);
-    const int cols = we - k - 1;
-    temp_.resize(std::max(cols, 1));
-    for (int j = 0; j < cols; ++j) temp_[j] = F(k + 1 + j, k) / d;
-    trapezoid_update(m_ - k - 1, cols, 1, &F(k + 1, k), m_, temp_.data(), cols, &F(k + 1, k + 1), m_);
-    const double inv = 1.0 / d;
+  /// Column k brought up to date with the pivots [kb, k) (all 1x1): F(k:, k) -= L(k:, kb:k)
+  /// (L D)(k, kb:k)ᵀ.
+  void refresh(int kb, int k) {
+    temp_.resize(k - kb);
+    for (int c = kb; c < k; ++c) temp_[c - kb] = F(k, c) * F(c, c);
+    column_update(m_ - k, k - kb, &F(k, kb), m_, temp_.data(), &F(k, k));
+  }
+
+  /// L's column k from pivot k (1x1): the column below the diagonal over the pivot.
+  void scale_column(int k) {
+    const double inv = 1.0 / F(k, k);
     for (int i = k + 1; i < m_; ++i) F(i, k) *= inv;
   }
 
-  /// 2x2 pivot on k, k + 1, the window's columns (k + 1, we) updated.
-  void eliminate_2x2(int k, int we) {
+  /// Pivot k, right-looking: updates the fully summed columns (k, q), then stores L's
+  /// column.
+  void eliminate_1x1(int k) {
+    const double d = F(k, k);
+    const int cols = q_ - k - 1;
+    temp_.resize(std::max(cols, 1));
+    for (int j = 0; j < cols; ++j) temp_[j] = F(k + 1 + j, k) / d;
+    trapezoid_update(m_ - k - 1, cols, 1, &F(k + 1, k), m_, temp_.data(), cols, &F(k + 1, k + 1), m_);
+    scale_column(k);
+  }
+
+  /// 2x2 pivot on k, k + 1, right-looking: the fully summed columns (k + 1, q) updated.
+  void eliminate_2x2(int k) {
     const double a = F(k, k), b = F(k + 1, k), c = F(k + 1, k + 1), det = a * c - b * b;
     const int rows = m_ - k - 2;
     temp_.resize(2 * static_cast<std::size_t>(std::max(rows, 1)));
@@ -204,12 +216,9 @@ class Front {
       L1[i - k - 2] = (c * w1 - b * w2) / det;
       L2[i - k - 2] = (a * w2 - b * w1) / det;
     }
-    trapezoid_update(rows, we - k - 2, 2, &F(k + 2, k), m_, L1, rows, &F(k + 2, k + 2), m_);
+    trapezoid_update(rows, q_ - k - 2, 2, &F(k + 2, k), m_, L1, rows, &F(k + 2, k + 2), m_);
     for (int i = k + 2; i < m_; ++i) F(i, k) = L1[i - k - 2], F(i, k + 1) = L2[i - k - 2];
   }
-
-  /// Columns [from, q) of the window's end get the pivots [kb, k).
-  void flush(int kb, int k, int from) { update(kb, k, from, q_); }
 
   /// F(i, j) -= Σ_{c in [c0, c1)} L(i, c) (L D)(j, c) for j in [from, to), i >= j: one
   /// product. With to = m (the default) it is the contribution block's update.

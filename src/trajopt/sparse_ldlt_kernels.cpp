@@ -100,7 +100,43 @@ bool has_avx2() {
   return avx2;
 }
 
+/// y -= A x, four columns of A at a time.
+template <int W>
+__attribute__((always_inline)) inline void column_body(int rows, int p, const double* __restrict A, std::ptrdiff_t lda,
+                                                       const double* __restrict x, double* __restrict y) {
+  int c = 0;
+  for (; c + 4 <= p; c += 4) {
+    const double* a0 = A + c * lda;
+    const double* a1 = a0 + lda;
+    const double* a2 = a1 + lda;
+    const double* a3 = a2 + lda;
+    const double x0 = x[c], x1 = x[c + 1], x2 = x[c + 2], x3 = x[c + 3];
+    for (int i = 0; i < rows; ++i) y[i] -= a0[i] * x0 + a1[i] * x1 + a2[i] * x2 + a3[i] * x3;
+  }
+  for (; c < p; ++c) {
+    const double* a = A + c * lda;
+    const double xc = x[c];
+    for (int i = 0; i < rows; ++i) y[i] -= a[i] * xc;
+  }
+}
+
+__attribute__((target("avx2,fma"))) void column_avx2(int rows, int p, const double* A, std::ptrdiff_t lda,
+                                                     const double* x, double* y) {
+  column_body<4>(rows, p, A, lda, x, y);
+}
+void column_sse2(int rows, int p, const double* A, std::ptrdiff_t lda, const double* x, double* y) {
+  column_body<2>(rows, p, A, lda, x, y);
+}
+
 }  // namespace
+
+void column_update(int rows, int p, const double* A, int lda, const double* x, double* y) {
+  if (rows <= 0 || p <= 0) return;
+  if (has_avx2())
+    column_avx2(rows, p, A, lda, x, y);
+  else
+    column_sse2(rows, p, A, lda, x, y);
+}
 
 double max_abs(const double* x, int n) { return has_avx2() ? max_abs_avx2(x, n) : max_abs_sse2(x, n); }
 
