@@ -23,8 +23,9 @@ struct LdltSymbolic {
   std::vector<int> sn_parent;  ///< parent supernode, -1 at a root; children come before parents
   /// The matrix's entries by columns of the permuted lower triangle: column k (position)
   /// holds positions row[colptr[k] .. colptr[k + 1]) >= k; entry t of the input goes to
-  /// slot[t] (duplicates keep their own slots and are summed on assembly).
-  std::vector<int> colptr, row, slot;
+  /// slot[t] (duplicates keep their own slots and are summed on assembly); source[slot[t]]
+  /// = t.
+  std::vector<int> colptr, row, slot, source;
   long long factor_doubles = 0;  ///< factor storage without delayed pivots
   long long factor_ints = 0;
   int max_front = 0;             ///< largest front without delayed pivots

@@ -278,12 +278,14 @@ void ldlt_map_columns(LdltSymbolic& s, long long nz, const int* rows, const int*
   for (int k = 0; k < n; ++k) s.colptr[k + 1] += s.colptr[k];
   s.row.resize(static_cast<std::size_t>(nz));
   s.slot.resize(static_cast<std::size_t>(nz));
+  s.source.resize(static_cast<std::size_t>(nz));
   std::vector<int> next(s.colptr.begin(), s.colptr.end() - 1);
   for (long long t = 0; t < nz; ++t) {
     const int pi = pos[rows[t] - base], pj = pos[cols[t] - base];
     const int at = next[std::min(pi, pj)]++;
     s.row[at] = std::max(pi, pj);
     s.slot[t] = at;
+    s.source[at] = static_cast<int>(t);
   }
 }
 

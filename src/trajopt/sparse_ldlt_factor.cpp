@@ -269,7 +269,7 @@ LdltFactorStatus ldlt_factor(const LdltSymbolic& s, const double* values, double
   // with the factor).
   const std::size_t nz = s.slot.size();
   w.val.resize(nz);
-  for (std::size_t t = 0; t < nz; ++t) w.val[s.slot[t]] = values[t];
+  for (std::size_t at = 0; at < nz; ++at) w.val[at] = values[s.source[at]];
   w.where.assign(n, -1);
   w.nchild.assign(nsn, 0);
   for (int t = 0; t < nsn; ++t)

@@ -92,14 +92,6 @@ __attribute__((always_inline)) inline double max_abs_body(const double* x, int n
 __attribute__((target("avx2,fma"))) double max_abs_avx2(const double* x, int n) { return max_abs_body<4>(x, n); }
 double max_abs_sse2(const double* x, int n) { return max_abs_body<2>(x, n); }
 
-bool has_avx2() {
-  static const bool avx2 = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  }();
-  return avx2;
-}
-
 /// y -= A x, four columns of A at a time.
 template <int W>
 __attribute__((always_inline)) inline void column_body(int rows, int p, const double* __restrict A, std::ptrdiff_t lda,
@@ -128,25 +120,32 @@ void column_sse2(int rows, int p, const double* A, std::ptrdiff_t lda, const dou
   column_body<2>(rows, p, A, lda, x, y);
 }
 
+/// The kernels of the CPU, chosen once when the program starts.
+struct Kernels {
+  decltype(&update_sse2) update;
+  decltype(&column_sse2) column;
+  decltype(&max_abs_sse2) max_abs;
+};
+
+Kernels choose() {
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return {update_avx2, column_avx2, max_abs_avx2};
+  return {update_sse2, column_sse2, max_abs_sse2};
+}
+
+const Kernels kernels = choose();
+
 }  // namespace
 
 void column_update(int rows, int p, const double* A, int lda, const double* x, double* y) {
-  if (rows <= 0 || p <= 0) return;
-  if (has_avx2())
-    column_avx2(rows, p, A, lda, x, y);
-  else
-    column_sse2(rows, p, A, lda, x, y);
+  if (rows > 0 && p > 0) kernels.column(rows, p, A, lda, x, y);
 }
 
-double max_abs(const double* x, int n) { return has_avx2() ? max_abs_avx2(x, n) : max_abs_sse2(x, n); }
+double max_abs(const double* x, int n) { return kernels.max_abs(x, n); }
 
 void trapezoid_update(int rows, int cols, int p, const double* L, int ldl, const double* Wm, int ldw, double* C,
                       int ldc) {
-  if (rows <= 0 || cols <= 0 || p <= 0) return;
-  if (has_avx2())
-    update_avx2(rows, cols, p, L, ldl, Wm, ldw, C, ldc);
-  else
-    update_sse2(rows, cols, p, L, ldl, Wm, ldw, C, ldc);
+  if (rows > 0 && cols > 0 && p > 0) kernels.update(rows, cols, p, L, ldl, Wm, ldw, C, ldc);
 }
 
 }  // namespace freeflex::detail
