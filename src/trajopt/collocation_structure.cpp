@@ -331,6 +331,9 @@ void CollocationNlp::build_compressed_hessian_structure(const std::function<int(
     const int q = 2 * nz_ + nu_;  // without T
     std::vector<bool> hrow(nz_, false), act(q, false), trow(q, false);
     for (const auto& rc : dyn_.hessian_pattern()) hrow[rc.first] = hrow[rc.second] = true;
+    h_rows_.clear();
+    for (int i = 0; i < nz_; ++i)
+      if (hrow[i]) h_rows_.push_back(i);
     auto ynz = [&](int i, int c) {
       return i == c || std::find(fpat.begin(), fpat.end(), std::make_pair(i, c)) != fpat.end();
     };
