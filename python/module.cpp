@@ -236,7 +236,14 @@ PYBIND11_MODULE(_freeflex, m) {
       .def(py::init<>())
       .def_readwrite("simulation", &SuppressionOptions::simulation)
       .def_readwrite("tvlqr", &SuppressionOptions::tvlqr)
-      .def_readwrite("closed_loop", &SuppressionOptions::closed_loop);
+      .def_readwrite("closed_loop", &SuppressionOptions::closed_loop)
+      .def_property(
+          "closed_loop_first_order_method",
+          [](const SuppressionOptions& o) { return std::string(to_string(o.closed_loop_first_order_method)); },
+          [](SuppressionOptions& o, const std::string& s) {
+            o.closed_loop_first_order_method = enum_from<ClosedLoopMethod>("closed_loop_first_order_method", s);
+          })
+      .def_readwrite("closed_loop_gauss_steps", &SuppressionOptions::closed_loop_gauss_steps);
 
   // ---- results
   py::class_<SimulationResult>(m, "SimulationResult")
@@ -359,11 +366,16 @@ PYBIND11_MODULE(_freeflex, m) {
   }, py::arg("model"), py::arg("t0"), py::arg("tf"), py::arg("Q"), py::arg("R"), py::arg("options") = TvlqrOptions{});
   auto closed = [](bool full) {
     return [full](const PyFirstOrderModel& f, const TvlqrResult& law, double until_s, Eigen::VectorXd limits,
-                  double output_step_s, const IntegratorOptions& integrator) {
+                  double output_step_s, const IntegratorOptions& integrator, const std::string& method,
+                  int gauss_steps) {
       finite_or_throw("until_s", until_s);
       if (law.K.empty()) throw std::invalid_argument("closed loop: the law has no gains (the TV-LQR failed: " + law.message + ")");
       ClosedLoopOptions co;
       co.integrator = integrator;
+      co.first_order_method = enum_from<ClosedLoopMethod>("method", method);
+      if (full && co.first_order_method != ClosedLoopMethod::Cvodes)
+        throw std::invalid_argument("method = \"" + method + "\": the full model's closed loop is integrated by CVODES only");
+      co.gauss_steps = gauss_steps;
       co.t_begin = 0.0;
       co.t_end = until_s;
       co.output_step_s = output_step_s;
@@ -376,10 +388,14 @@ PYBIND11_MODULE(_freeflex, m) {
   };
   m.def("simulate_closed_loop_first_order", closed(false), py::arg("model"), py::arg("law"), py::arg("until_s"),
         py::arg("limits") = Eigen::VectorXd(), py::arg("output_step_s") = 0.005,
-        py::arg("integrator") = closed_loop_integrator());
+        py::arg("integrator") = closed_loop_integrator(), py::arg("method") = "cvodes",
+        py::arg("gauss_steps") = ClosedLoopOptions{}.gauss_steps,
+        "method: \"cvodes\" (integrator's settings) or \"gauss\" (gauss_steps per interval, ClosedLoopMethod)");
   m.def("simulate_closed_loop_full", closed(true), py::arg("model"), py::arg("law"), py::arg("until_s"),
         py::arg("limits") = Eigen::VectorXd(), py::arg("output_step_s") = 0.005,
-        py::arg("integrator") = closed_loop_integrator());
+        py::arg("integrator") = closed_loop_integrator(), py::arg("method") = "cvodes",
+        py::arg("gauss_steps") = ClosedLoopOptions{}.gauss_steps,
+        "the full model's closed loop is always integrated by CVODES (method must be \"cvodes\")");
 
   // ---- the whole chain in one call
   py::class_<SuppressionProblem>(m, "SuppressionProblem")

@@ -165,6 +165,8 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   options.tvlqr.grid_step_s = st.grid_step_s;
   options.closed_loop.rtol = st.closed_loop_rtol;
   options.closed_loop.atol = st.closed_loop_atol;
+  options.closed_loop_first_order_method = st.closed_loop_first_order_method;
+  options.closed_loop_gauss_steps = st.closed_loop_gauss_steps;
   std::unique_ptr<ProgressReport> report;
   r.chain = suppress_vibration(body, problem, with_progress(options, log, report));
   const SuppressionResult& chain = r.chain;

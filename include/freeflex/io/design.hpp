@@ -58,6 +58,12 @@ inline constexpr double kMaxGainStorage = 5e7;
 /// Work of one integration (simulation, comparison run, switch-time simulation): CVODES
 /// steps x max(n², 400), n = 3 + model.noa; integrator_step_budget() turns it into steps.
 inline constexpr double kMaxIntegratorWork = 2e9;
+/// Work of the Gauss closed loop ([controller] closed_loop_first_order_method = "gauss"):
+/// Gauss steps x (5 n)³, n = 2 (3 + model.noa), one dense LU of the 5-stage system per
+/// step, the steps counted as closed_loop_gauss_steps per interval of the gain grid and
+/// of the output times: about 3 min (designs/suppress_slew.toml with 8 steps: 8 000
+/// steps at NOA 6, 5.9e9, 1.7 s).
+inline constexpr double kMaxGaussWork = 6e11;
 inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
 inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
 inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;
@@ -168,6 +174,9 @@ struct ControllerStudy {
   /// CVODES tolerances of the closed-loop runs (defaults: closed_loop_integrator()).
   double closed_loop_rtol = closed_loop_integrator().rtol;
   double closed_loop_atol = closed_loop_integrator().atol;
+  /// How the first-order closed loop is integrated (ClosedLoopOptions).
+  ClosedLoopMethod closed_loop_first_order_method = ClosedLoopMethod::Cvodes;
+  int closed_loop_gauss_steps = ClosedLoopOptions{}.gauss_steps;
 };
 
 /// [export]: what the controller study leaves for other tools (README, outputs): files
