@@ -24,10 +24,19 @@ namespace {
 constexpr int kMagic = 0x46464c44;  // "FFLD"
 constexpr int kHeader = 4;
 
+/// At least n entries in v (grown, never shrunk): resizing a vector up value-initializes
+/// what it adds, which cost the elastic maneuvers a tenth of their solve in memset.
+template <class T>
+T* room(std::vector<T>& v, std::size_t n) {
+  if (v.size() < n) v.resize(std::max(n, 2 * v.size()));
+  return v.data();
+}
+
 struct Workspace {
   std::vector<int> where, idx, kind, nchild, local;
   std::vector<double> val, front, temp;
-  std::vector<double> stack;    // contribution blocks (r x r, column major)
+  std::vector<double> stack;    // contribution blocks (r x r, column major), stack_used of it in use
+  std::size_t stack_used = 0;
   std::vector<int> stack_idx;   // their positions
   struct Block {
     std::size_t off, idx_off;
@@ -182,9 +191,9 @@ class Front {
   /// Column k brought up to date with the pivots [kb, k) (all 1x1): F(k:, k) -= L(k:, kb:k)
   /// (L D)(k, kb:k)ᵀ.
   void refresh(int kb, int k) {
-    temp_.resize(k - kb);
-    for (int c = kb; c < k; ++c) temp_[c - kb] = F(k, c) * F(c, c);
-    column_update(m_ - k, k - kb, &F(k, kb), m_, temp_.data(), &F(k, k));
+    double* t = room(temp_, k - kb);
+    for (int c = kb; c < k; ++c) t[c - kb] = F(k, c) * F(c, c);
+    column_update(m_ - k, k - kb, &F(k, kb), m_, t, &F(k, k));
   }
 
   /// L's column k from pivot k (1x1): the column below the diagonal over the pivot.
@@ -198,9 +207,9 @@ class Front {
   void eliminate_1x1(int k) {
     const double d = F(k, k);
     const int cols = q_ - k - 1;
-    temp_.resize(std::max(cols, 1));
-    for (int j = 0; j < cols; ++j) temp_[j] = F(k + 1 + j, k) / d;
-    trapezoid_update(m_ - k - 1, cols, 1, &F(k + 1, k), m_, temp_.data(), cols, &F(k + 1, k + 1), m_);
+    double* t = room(temp_, std::max(cols, 1));
+    for (int j = 0; j < cols; ++j) t[j] = F(k + 1 + j, k) / d;
+    trapezoid_update(m_ - k - 1, cols, 1, &F(k + 1, k), m_, t, cols, &F(k + 1, k + 1), m_);
     scale_column(k);
   }
 
@@ -208,8 +217,7 @@ class Front {
   void eliminate_2x2(int k) {
     const double a = F(k, k), b = F(k + 1, k), c = F(k + 1, k + 1), det = a * c - b * b;
     const int rows = m_ - k - 2;
-    temp_.resize(2 * static_cast<std::size_t>(std::max(rows, 1)));
-    double* L1 = temp_.data();
+    double* L1 = room(temp_, 2 * static_cast<std::size_t>(std::max(rows, 1)));
     double* L2 = L1 + rows;
     for (int i = k + 2; i < m_; ++i) {
       const double w1 = F(i, k), w2 = F(i, k + 1);
@@ -226,8 +234,7 @@ class Front {
     if (to < 0) to = m_;
     const int rows = m_ - from, cols = to - from, p = c1 - c0;
     if (rows <= 0 || cols <= 0 || p <= 0) return;
-    temp_.resize(static_cast<std::size_t>(cols) * p);
-    double* W = temp_.data();  // (L D)(from:to, c0:c1)
+    double* W = room(temp_, static_cast<std::size_t>(cols) * p);  // (L D)(from:to, c0:c1)
     for (int c = c0; c < c1; ++c) {
       const double* l = &F(from, c);
       double* w = W + static_cast<std::ptrdiff_t>(c - c0) * cols;
@@ -275,7 +282,7 @@ LdltFactorStatus ldlt_factor(const LdltSymbolic& s, const double* values, double
   for (int t = 0; t < nsn; ++t)
     if (s.sn_parent[t] >= 0) ++w.nchild[s.sn_parent[t]];
   w.blocks.clear();
-  w.stack.clear();
+  w.stack_used = 0;
   w.stack_idx.clear();
 
   const long long table = kHeader + n;
@@ -316,8 +323,7 @@ LdltFactorStatus ldlt_factor(const LdltSymbolic& s, const double* values, double
     st.max_front = std::max(st.max_front, m);
 
     // Assembly into the lower triangle.
-    w.front.resize(static_cast<std::size_t>(m) * m);
-    double* F = w.front.data();
+    double* F = room(w.front, static_cast<std::size_t>(m) * m);
     for (int j = 0; j < m; ++j) std::fill(F + j + static_cast<std::ptrdiff_t>(j) * m, F + static_cast<std::ptrdiff_t>(j + 1) * m, 0.0);
     for (int c = c0; c < c1; ++c) {
       const std::ptrdiff_t lc = w.where[c];
@@ -336,7 +342,7 @@ LdltFactorStatus ldlt_factor(const LdltSymbolic& s, const double* values, double
       }
     }
     if (first_child < w.blocks.size()) {
-      w.stack.resize(w.blocks[first_child].off);
+      w.stack_used = w.blocks[first_child].off;
       w.stack_idx.resize(w.blocks[first_child].idx_off);
       w.blocks.resize(first_child);
     }
@@ -373,13 +379,13 @@ LdltFactorStatus ldlt_factor(const LdltSymbolic& s, const double* values, double
     // The contribution block goes on the stack.
     const int r = m - p;
     if (r > 0) {
-      Workspace::Block blk{w.stack.size(), w.stack_idx.size(), r, q - p};
+      Workspace::Block blk{w.stack_used, w.stack_idx.size(), r, q - p};
       // the delayed pivots back in increasing order (pivoting may have swapped them)
       w.local.resize(r);
       for (int x = 0; x < r; ++x) w.local[x] = p + x;
       std::sort(w.local.begin(), w.local.begin() + (q - p), [idx = w.idx.data()](int a, int b) { return idx[a] < idx[b]; });
-      w.stack.resize(blk.off + static_cast<std::size_t>(r) * r);
-      double* cb = w.stack.data() + blk.off;
+      w.stack_used = blk.off + static_cast<std::size_t>(r) * r;
+      double* cb = room(w.stack, w.stack_used) + blk.off;
       const int ndel = q - p;
       for (int y = 0; y < r; ++y) {
         double* to = cb + static_cast<std::ptrdiff_t>(y) * r;
