@@ -72,7 +72,9 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
       for (int j = 0; j < na; ++j) c.Ha(i, j) = s * Hbuf_(h_rows_[i], h_rows_[j]);
     }
     c.HaYa.noalias() = c.Ha * c.Ya;
-    B_.noalias() = c.Ya.transpose() * c.HaYa;
+    // B is symmetric and only its lower triangle is read (dense_act_ ascends; the T row is last)
+    B_.resize(q, q);
+    B_.triangularView<Eigen::Lower>() = c.Ya.transpose() * c.HaYa;
     if (free_time()) {
       const int iT = q - 1;
       // s' ∂g/∂v with ∂g/∂v = λᵀ J_c Y; ∂²x_c/∂T∂z_a = σ/8 J_a, ∂²x_c/∂T∂z_b = −σ/8 J_b
