@@ -118,7 +118,7 @@ TEST_CASE("ZV and ZVD shapers cancel a single mode", "[control]") {
   CHECK(zv_shaper(w).times[1] == Approx(M_PI / w).epsilon(1e-15));  // half the damped period: one rounding
 }
 
-TEST_CASE("switch-time design: SLSQP refinement reaches Newton's design (k = 1)", "[control]") {
+TEST_CASE("switch-time design: SLSQP refinement reaches Newton's design (k = 1)", "[control][slow]") {
   const FlexibleBody body = torque_beam();
   SwitchTimeOptions o;  // the defaults' problem: 3 rad with |τ| <= 1 N m by element 0
   const SwitchTimeResult newton = design_switch_times(body, 0, 3.0, 1.0, 1, o);
