@@ -69,6 +69,8 @@ TEST_CASE("every Options struct's defaults are valid", "[api]") {
   rejects(RunOptions{}, [](auto& o) { o.plot.timeout_s = 1e9; }, "timeout_s = 1e+09");
   rejects(IntegratorOptions{}, [](auto& o) { o.max_total_steps = -1; }, "max_total_steps = -1");
   rejects(SwitchTimeOptions{}, [](auto& o) { o.max_steps_per_simulation = -1; }, "max_steps_per_simulation");
+  rejects(SwitchTimeOptions{}, [](auto& o) { o.max_total_steps = -1; }, "max_total_steps = -1");
+  rejects(SwitchTimeOptions{}, [](auto& o) { o.simulations_per_unknown = 0; }, "simulations_per_unknown = 0");
   CHECK_NOTHROW(validate(DiscretizeOptions{}));
   CHECK_NOTHROW(validate(PlantOptions{}));
   CHECK_NOTHROW(validate(SampledLoopOptions{}));
