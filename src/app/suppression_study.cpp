@@ -313,8 +313,15 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     }
     cmd.panels.push_back(p);
   }
+  // every nominal's open loop and TV-LQR (a vibration-aware maneuver adds its rigid
+  // optimum's): with more than one nominal, the nonlinear model's only, to stay readable
+  auto ends_with = [](const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  const bool several = r.rigid_chain.has_value();
   for (const auto& c : r.cases) {
-    if (c.name != "open_loop" && c.name != "tvlqr") continue;
+    if (!ends_with(c.name, "open_loop") && !ends_with(c.name, "tvlqr")) continue;
+    if (several && c.model != "nonlinear") continue;
     Eigen::MatrixXd h(c.t.size(), 1 + static_cast<Eigen::Index>(st.actuators.size()));
     h.col(0) = c.t;
     std::vector<std::string> header{"t"};
@@ -325,8 +332,10 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     const std::string file = "commands_" + c.name + "_" + c.model + ".csv";
     out.csv(file, header, h);
     for (std::size_t k = 0; k < st.actuators.size(); ++k)
-      cmd.panels[k].series.push_back({file, 1, 2 + static_cast<int>(k), c.name + " (" + c.model + ")",
-                                      c.model == "nonlinear" ? "lines" : "lines dt 2"});
+      cmd.panels[k].series.push_back(
+          {file, 1, 2 + static_cast<int>(k), c.name + " (" + c.model + ")",
+           // dashed: the first-order model's, or the rigid optimum's beside the vibration-aware one it lies on
+           c.model == "nonlinear" && c.name.rfind("rigid_optimum_", 0) != 0 ? "lines" : "lines dt 2"});
   }
   out.plot(cmd, design.plots);
 }

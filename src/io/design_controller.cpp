@@ -97,12 +97,15 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
   outputs.named(c, "figure", st.figure, {".gp", ".png"});
   outputs.named(c, "figure", st.figure + "_commands", {".gp", ".png"});
   outputs.fixed("[controller]", "comparison.csv");
-  for (const char* cs : {"open_loop", "tvlqr"})
-    for (const char* model : {"first_order", "nonlinear"})
-      outputs.fixed("[controller]", std::string("commands_") + cs + "_" + model + ".csv");
-  for (const char* cs : {"open_loop", "tvlqr"})
-    for (const char* model : {"first_order", "nonlinear"})
-      outputs.fixed("[controller]", std::string("case_") + cs + "_" + model + ".csv");
+  // a vibration-aware maneuver's cases carry its name and its rigid optimum's
+  std::vector<std::string> prefixes{""};
+  if (d.maneuver && d.maneuver->problem.elastic) prefixes = {"vibration_aware_", "rigid_optimum_"};
+  for (const std::string& prefix : prefixes)
+    for (const char* cs : {"open_loop", "tvlqr"})
+      for (const char* model : {"first_order", "nonlinear"}) {
+        outputs.fixed("[controller]", "commands_" + prefix + cs + "_" + model + ".csv");
+        outputs.fixed("[controller]", "case_" + prefix + cs + "_" + model + ".csv");
+      }
   if (!root.has("load") && !root.has("maneuver"))
     c.problem("actuators",
               "[controller] needs a nominal motion whose vibration it suppresses: add a [[load]] or a "
