@@ -12,6 +12,7 @@
 //       states and the reference θ(t), q(t) for scripts/dop853_compare.py (SciPy rows)
 #include <time.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -85,6 +86,7 @@ void table(int reps, const std::string& only, const std::vector<int>& noas) {
                          {"full, Adams, modal", true, M::Adams, V::Modal, {}},
                          {"full, BDF, physical", true, M::Bdf, V::Physical, {}},
                          {"full, DOP853, physical", true, M::Dop853, V::Physical, tight},
+                         {"full, Verner 9(8), physical", true, M::Verner98, V::Physical, tight},
                          {"perturbation, Adams, modal (default)", false, M::Adams, V::Modal, {}},
                          {"perturbation, Adams, physical", false, M::Adams, V::Physical, {}},
                          {"perturbation, DOP853, modal", false, M::Dop853, V::Modal, {1e-6, 1e-8, 1e-10}},
@@ -144,13 +146,16 @@ void table(int reps, const std::string& only, const std::vector<int>& noas) {
 
 /// Work at equal error: the full model at many tolerances (10^(-k/4)), each row's θ error
 /// against the reference, RHS and CPU time; then a least-squares line of log error against
-/// log work through the rows with errors in [1e-6, 1e-2] (the motion is sensitive, so single
-/// rows scatter by factors of 2-4), read at an error of `target` rad.
+/// log work through the rows with errors within a factor of 10 of `target` rad (the motion
+/// is sensitive, so single rows scatter by factors of 2-4), read at `target`; the CPU time
+/// there is that many RHS at the median CPU time per RHS of those rows (single CPU times
+/// on the shared machine scatter more than the RHS counts).
 void sweep(int reps, const std::string& only, const std::vector<int>& noas, double target) {
   using M = IntegratorOptions::Method;
   using V = SimulationOptions::Variables;
   const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical, {}},
-                         {"full, DOP853, physical", true, M::Dop853, V::Physical, {}}};
+                         {"full, DOP853, physical", true, M::Dop853, V::Physical, {}},
+                         {"full, Verner 9(8), physical", true, M::Verner98, V::Physical, {}}};
   std::cout << "load average at start: " << load_average() << "\n";
   for (int noa : noas) {
     const double T = noa == 20 || noa == 40 ? 1.0 : 3.0;
@@ -160,7 +165,8 @@ void sweep(int reps, const std::string& only, const std::vector<int>& noas, doub
       if (!only.empty() && std::string(op.name).find(only) == std::string::npos) continue;
       std::cout << "\nNOA " << noa << ", " << op.name << ", 0-" << T << " s\n\n| rtol | error θ [rad] | RHS | steps | CPU [ms] |\n"
                 << "| --- | --- | --- | --- | --- |\n";
-      double sx = 0, sy = 0, sxx = 0, sxy = 0, scx = 0, scy = 0, scxx = 0, scxy = 0;
+      double sx = 0, sy = 0, sxx = 0, sxy = 0;
+      std::vector<double> per_rhs;
       int m = 0;
       // rtol 10^(-k/8): NOA 6 needs 1e-9 to 1e-12 for errors near 1e-4 (the motion to 3 s is
       // sensitive), NOA 20 over 1 s 1e-5 to 1e-9
@@ -184,17 +190,19 @@ void sweep(int reps, const std::string& only, const std::vector<int>& noas, doub
         std::cout << std::setprecision(3) << "| " << rtol << " | " << std::setprecision(2) << et << " | "
                   << r.rhs_evaluations << " | " << r.steps << " | " << std::setprecision(3) << 1e3 * best << " |"
                   << std::endl;
-        if (et < 1e-6 || et > 1e-2) continue;
-        const double x = std::log(static_cast<double>(r.rhs_evaluations)), y = std::log(et), cx = std::log(best);
-        sx += x, sy += y, sxx += x * x, sxy += x * y, scx += cx, scy += y, scxx += cx * cx, scxy += cx * y;
+        if (et < 0.1 * target || et > 10.0 * target) continue;
+        const double x = std::log(static_cast<double>(r.rhs_evaluations)), y = std::log(et);
+        sx += x, sy += y, sxx += x * x, sxy += x * y;
+        per_rhs.push_back(best / r.rhs_evaluations);
         ++m;
       }
-      if (m < 2) continue;
+      if (m < 3) continue;
       const double b = (m * sxy - sx * sy) / (m * sxx - sx * sx), a = (sy - b * sx) / m;
-      const double cb = (m * scxy - scx * scy) / (m * scxx - scx * scx), ca = (scy - cb * scx) / m;
+      std::sort(per_rhs.begin(), per_rhs.end());
+      const double rhs_at = std::exp((std::log(target) - a) / b), cpu_per_rhs = per_rhs[per_rhs.size() / 2];
       std::cout << "\nfit over " << m << " rows: error ~ RHS^" << std::setprecision(3) << b << "; at error " << target
-                << " rad: " << std::setprecision(4) << std::exp((std::log(target) - a) / b) << " RHS, "
-                << 1e3 * std::exp((std::log(target) - ca) / cb) << " ms CPU\n";
+                << " rad: " << std::setprecision(4) << rhs_at << " RHS, " << 1e3 * rhs_at * cpu_per_rhs
+                << " ms CPU (" << 1e9 * cpu_per_rhs << " ns a RHS)\n";
     }
   }
 }
@@ -202,7 +210,7 @@ void sweep(int reps, const std::string& only, const std::vector<int>& noas, doub
 /// Model data (JSON), right-hand sides at random states (CSV) and the reference run of the
 /// full model (CSV) for the SciPy comparison.
 void export_case(const std::string& dir) {
-  for (int noa : {6, 20}) {
+  for (int noa : {6, 20, 40}) {
     const double T = noa == 6 ? 3.0 : 1.0;
     const Case c = moment_case(noa);
     const ModalIntegrals& mi = c.body.integrals();

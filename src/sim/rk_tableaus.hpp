@@ -32,5 +32,7 @@ struct ButcherPair {
 /// Dormand and Prince's 8(5,3) pair (Hairer's DOP853): 12 evaluations a step, dense
 /// output of order 7 with 3 more.
 const ButcherPair& dop853();
+/// Verner's 9(8) pair: 16 evaluations a step, dense output of order 9 with 10 more.
+const ButcherPair& verner98();
 
 }  // namespace freeflex::detail

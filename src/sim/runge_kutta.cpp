@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstddef>
 #include <exception>
 #include <memory>
 #include <string>
@@ -161,15 +162,27 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     return false;
   }
 
-  /// stage_ = y + h Σ_j a(i, j) k_j.
+  /// stage_ = y + h Σ_j a(i, j) k_j: the sum first (as Hairer's code, so that y takes one
+  /// rounding), written as plain loops over the 18-90 entries, no library calls.
   void form_stage(const Eigen::VectorXd& y, double h, int i) {
     const int N = n_ + nq_;
-    double* s = stage_.data();
-    const double* yv = y.data();
-    for (int r = 0; r < N; ++r) s[r] = 0.0;
-    for (const Weight& w : rows_[i]) {
-      const double* k = K_.data() + static_cast<std::ptrdiff_t>(w.j) * N;
-      for (int r = 0; r < N; ++r) s[r] += w.v * k[r];
+    double* __restrict s = stage_.data();
+    const double* __restrict yv = y.data();
+    const double* K = K_.data();
+    const std::vector<Weight>& row = rows_[i];
+    if (row.empty()) {
+      for (int r = 0; r < N; ++r) s[r] = yv[r];
+      return;
+    }
+    {
+      const double* __restrict k = K + static_cast<std::ptrdiff_t>(row[0].j) * N;
+      const double a = row[0].v;
+      for (int r = 0; r < N; ++r) s[r] = a * k[r];
+    }
+    for (std::size_t t = 1; t < row.size(); ++t) {
+      const double* __restrict k = K + static_cast<std::ptrdiff_t>(row[t].j) * N;
+      const double a = row[t].v;
+      for (int r = 0; r < N; ++r) s[r] += a * k[r];
     }
     for (int r = 0; r < N; ++r) s[r] = yv[r] + h * s[r];
   }
@@ -332,7 +345,8 @@ class RungeKuttaStepper final : public detail::PieceStepper {
 
 std::unique_ptr<detail::PieceStepper> detail::runge_kutta_stepper(const OdeSystem& system,
                                                                   const IntegratorOptions& options) {
-  return std::make_unique<RungeKuttaStepper>(system, options, detail::dop853());
+  return std::make_unique<RungeKuttaStepper>(
+      system, options, options.method == IntegratorOptions::Method::Verner98 ? detail::verner98() : detail::dop853());
 }
 
 }  // namespace freeflex

@@ -59,11 +59,12 @@ struct IntegratorOptions {
   double rtol = 1e-8;   ///< relative tolerance, > 0
   double atol = 1e-10;  ///< absolute tolerance, > 0 (same for every component)
   /// Adams suits the lightly damped oscillations here (fewer steps, no numerical damping
-  /// of energy); BDF suits stiff cases (many functions, heavy damping). Dop853 is
-  /// freeflex's own explicit Runge-Kutta 8(5,3) pair (not CVODES): cheaper than Adams at
-  /// equal error when tight errors are wanted on a nonstiff problem (docs/theory.md
-  /// section 8); it ignores `max_order` and the Jacobian.
-  enum class Method { Bdf, Adams, Dop853 } method = Method::Adams;
+  /// of energy); BDF suits stiff cases (many functions, heavy damping). Dop853 (Dormand
+  /// and Prince's 8(5,3) pair) and Verner98 (Verner's 9(8) pair) are freeflex's own
+  /// explicit Runge-Kutta methods, not CVODES: cheaper than Adams at equal error when tight
+  /// errors are wanted on a nonstiff problem (docs/theory.md section 8); they ignore
+  /// `max_order` and the Jacobian.
+  enum class Method { Bdf, Adams, Dop853, Verner98 } method = Method::Adams;
   double max_step = 0.0;       ///< 0: no limit [s]
   long max_steps = 1000000;    ///< per output interval (one CVode call); exceeding it is a failure
   /// Steps of the whole integration (every piece and output interval; accepted steps,
@@ -124,10 +125,11 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
 template <>
 struct EnumNames<IntegratorOptions::Method> {
   static constexpr const char* what = "integration method";
-  static constexpr std::array<std::pair<IntegratorOptions::Method, const char*>, 3> names{
+  static constexpr std::array<std::pair<IntegratorOptions::Method, const char*>, 4> names{
       {{IntegratorOptions::Method::Bdf, "bdf"},
        {IntegratorOptions::Method::Adams, "adams"},
-       {IntegratorOptions::Method::Dop853, "dop853"}}};
+       {IntegratorOptions::Method::Dop853, "dop853"},
+       {IntegratorOptions::Method::Verner98, "verner98"}}};
 };
 
 template <>

@@ -1,5 +1,4 @@
-// The coefficients of the Runge-Kutta pairs of sim/rk_tableaus.hpp. DOP853: Hairer's
-// dop853.f (Hairer, Nørsett, Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
+// DOP853's coefficients (sim/rk_tableaus.hpp): Hairer's dop853.f (Hairer, Nørsett, Wanner, Solving Ordinary Differential Equations I, 2nd ed.,
 // II.5 and II.10), 30 significant digits as published; its dense output's nested form
 // (CONTD8) expanded here into powers of θ once.
 #include "sim/rk_tableaus.hpp"
