@@ -8,6 +8,10 @@
 //
 //   build/bench/bench_accuracy [reps] [--only TEXT] [--noa N]...   the table (rows whose
 //       name contains TEXT; NOA 6 over 3 s, 20 and 40 over 1 s; default 3 reps, NOA 6 and 20)
+//   build/bench/bench_accuracy 3 --sweep 1e-4 [--noa N]...   work at an error of 1e-4 rad:
+//       many tolerances, a fit of error against RHS (full model; Adams, DOP853, Verner)
+//   build/bench/bench_accuracy 3 --perturbation 1e-8 --noa 20   the perturbation solution's
+//       work by time span and method
 //   build/bench/bench_accuracy --export DIR      model data, right-hand sides at random
 //       states and the reference θ(t), q(t) for scripts/dop853_compare.py (SciPy rows)
 #include <time.h>
@@ -207,6 +211,45 @@ void sweep(int reps, const std::string& only, const std::vector<int>& noas, doub
   }
 }
 
+/// The perturbation solution's work by time span (issue 19: NOA 20 under 20 ms at rtol
+/// 1e-8 over 3 s): for each method and variables, RHS, steps and CPU time of runs to 0.5,
+/// 1, 2 and 3 s (the differences are the spans' shares) and the error of the 3 s run
+/// against the same solution at rtol 1e-13 (Adams, modal).
+void perturbation_spans(int reps, const std::vector<int>& noas, double rtol) {
+  using M = IntegratorOptions::Method;
+  using V = SimulationOptions::Variables;
+  const Option opts[] = {{"Adams, modal (default)", false, M::Adams, V::Modal, {}},
+                         {"DOP853, modal", false, M::Dop853, V::Modal, {}},
+                         {"Verner 9(8), modal", false, M::Verner98, V::Modal, {}},
+                         {"Adams, physical", false, M::Adams, V::Physical, {}}};
+  std::cout << "load average at start: " << load_average() << "\n\nrtol " << rtol << ", atol rtol/100\n\n";
+  std::cout << "| NOA | method, variables | to [s] | RHS | steps | CPU [ms] | error θ at 3 s [rad] | error q |\n"
+            << "| --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  for (int noa : noas) {
+    const Case c = moment_case(noa);
+    const SimulationResult ref = simulate_perturbation(c.body, c.ex, options(3.0, 1e-13, M::Adams, V::Modal)).total;
+    for (const Option& op : opts) {
+      for (double T : {0.5, 1.0, 2.0, 3.0}) {
+        const SimulationOptions o = options(T, rtol, op.method, op.variables);
+        SimulationResult r;
+        double best = 1e300;
+        for (int i = 0; i < reps; ++i) {
+          const double t0 = cpu_seconds();
+          r = simulate_perturbation(c.body, c.ex, o).total;
+          best = std::min(best, cpu_seconds() - t0);
+        }
+        std::cout << std::setprecision(3) << "| " << noa << " | " << op.name << " | " << T << " | "
+                  << r.rhs_evaluations << " | " << r.steps << " | " << 1e3 * best << " | ";
+        if (T == 3.0 && r.ok())
+          std::cout << std::setprecision(2) << (r.z.col(2) - ref.z.col(2)).cwiseAbs().maxCoeff() << " | "
+                    << (r.z.rightCols(noa) - ref.z.rightCols(noa)).cwiseAbs().maxCoeff() << " |\n";
+        else
+          std::cout << (r.ok() ? "" : r.message) << " | |\n";
+      }
+    }
+  }
+}
+
 /// Model data (JSON), right-hand sides at random states (CSV) and the reference run of the
 /// full model (CSV) for the SciPy comparison.
 void export_case(const std::string& dir) {
@@ -282,10 +325,12 @@ int main(int argc, char** argv) {
   int reps = 3;
   std::string only;
   std::vector<int> noas;
-  double target = 0.0;
+  double target = 0.0, pert_rtol = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--sweep" && i + 1 < argc)
+    if (a == "--perturbation" && i + 1 < argc)
+      pert_rtol = std::atof(argv[++i]);
+    else if (a == "--sweep" && i + 1 < argc)
       target = std::atof(argv[++i]);
     else if (a == "--only" && i + 1 < argc)
       only = argv[++i];
@@ -295,7 +340,9 @@ int main(int argc, char** argv) {
       reps = std::atoi(argv[i]);
   }
   if (noas.empty()) noas = {6, 20};
-  if (target > 0.0)
+  if (pert_rtol > 0.0)
+    perturbation_spans(reps, noas, pert_rtol);
+  else if (target > 0.0)
     sweep(reps, only, noas, target);
   else
     table(reps, only, noas);
