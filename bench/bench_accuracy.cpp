@@ -85,7 +85,7 @@ SimulationResult run(const Case& c, const Option& op, const SimulationOptions& o
 void table(int reps, const std::string& only, const std::vector<int>& noas) {
   using M = IntegratorOptions::Method;
   using V = SimulationOptions::Variables;
-  const std::vector<double> tight{1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+  const std::vector<double> tight{1e-6, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
   const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical, {}},
                          {"full, Adams, modal", true, M::Adams, V::Modal, {}},
                          {"full, BDF, physical", true, M::Bdf, V::Physical, {}},

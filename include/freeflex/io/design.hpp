@@ -58,6 +58,9 @@ inline constexpr double kMaxGainStorage = 5e7;
 /// Work of one integration (simulation, comparison run, switch-time simulation): CVODES
 /// steps x max(n², 400), n = 3 + model.noa; integrator_step_budget() turns it into steps.
 inline constexpr double kMaxIntegratorWork = 2e9;
+/// A step of the explicit Runge-Kutta pairs ([simulation] method "dop853", "verner98")
+/// counts as this many CVODES steps against kMaxIntegratorWork.
+inline constexpr long kExplicitStepWork = 10;
 inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
 inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
 inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;
