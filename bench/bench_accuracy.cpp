@@ -9,7 +9,8 @@
 //   build/bench/bench_accuracy [reps] [--only TEXT] [--noa N]...   the table (rows whose
 //       name contains TEXT; NOA 6 over 3 s, 20 and 40 over 1 s; default 3 reps, NOA 6 and 20)
 //   build/bench/bench_accuracy 3 --sweep 1e-4 [--noa N]...   work at an error of 1e-4 rad:
-//       many tolerances, a fit of error against RHS (full model; Adams, DOP853, Verner)
+//       many tolerances, a fit of error against RHS (full model; Adams, DOP853, Verner);
+//       with --rtol x (repeatable) at those tolerances only
 //   build/bench/bench_accuracy 3 --perturbation 1e-8 --noa 20   the perturbation solution's
 //       work by time span and method
 //   build/bench/bench_accuracy --export DIR      model data, right-hand sides at random
@@ -154,7 +155,8 @@ void table(int reps, const std::string& only, const std::vector<int>& noas) {
 /// is sensitive, so single rows scatter by factors of 2-4), read at `target`; the CPU time
 /// there is that many RHS at the median CPU time per RHS of those rows (single CPU times
 /// on the shared machine scatter more than the RHS counts).
-void sweep(int reps, const std::string& only, const std::vector<int>& noas, double target) {
+void sweep(int reps, const std::string& only, const std::vector<int>& noas, double target,
+           const std::vector<double>& chosen) {
   using M = IntegratorOptions::Method;
   using V = SimulationOptions::Variables;
   const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical, {}},
@@ -176,8 +178,10 @@ void sweep(int reps, const std::string& only, const std::vector<int>& noas, doub
       // sensitive), NOA 20 over 1 s 1e-5 to 1e-9
       const bool adams = op.method == M::Adams;
       const int k_first = noa == 6 ? (adams ? 80 : 64) : (adams ? 40 : 32), k_last = noa == 6 ? (adams ? 100 : 92) : 72;
-      for (int k = k_first; k <= k_last; k += 2) {
-        const double rtol = std::pow(10.0, -k / 8.0);
+      std::vector<double> rtols = chosen;
+      if (rtols.empty())
+        for (int k = k_first; k <= k_last; k += 2) rtols.push_back(std::pow(10.0, -k / 8.0));
+      for (double rtol : rtols) {
         const SimulationOptions o = options(T, rtol, op.method, op.variables);
         SimulationResult r;
         double best = 1e300;
@@ -326,9 +330,12 @@ int main(int argc, char** argv) {
   std::string only;
   std::vector<int> noas;
   double target = 0.0, pert_rtol = 0.0;
+  std::vector<double> chosen;  // --rtol x (repeatable): the sweep at these tolerances only
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--perturbation" && i + 1 < argc)
+    if (a == "--rtol" && i + 1 < argc)
+      chosen.push_back(std::atof(argv[++i]));
+    else if (a == "--perturbation" && i + 1 < argc)
       pert_rtol = std::atof(argv[++i]);
     else if (a == "--sweep" && i + 1 < argc)
       target = std::atof(argv[++i]);
@@ -343,7 +350,7 @@ int main(int argc, char** argv) {
   if (pert_rtol > 0.0)
     perturbation_spans(reps, noas, pert_rtol);
   else if (target > 0.0)
-    sweep(reps, only, noas, target);
+    sweep(reps, only, noas, target, chosen);
   else
     table(reps, only, noas);
   std::cout << "\nload average at end: " << load_average() << "\n";
