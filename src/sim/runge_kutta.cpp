@@ -2,8 +2,9 @@
 // the piece stepper of sim/stepper.hpp (docs/theory.md section 8). Error control and
 // step-size choice as Hairer's DOP853: local extrapolation, error weights
 // atol_i + rtol max(|y_n,i|, |y_n+1,i|), the new step from err^(-1/(q+1)) with a safety
-// factor, changed by a factor within [1/3, 6], not grown right after a rejection. Quadratures ride along as
-// extra components outside the error test, so the states are the same with or without them.
+// factor, changed by a factor within [1/3, 6], not grown right after a rejection.
+// Quadratures ride along as extra components outside the error test, so the states are
+// the same with or without them.
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
@@ -26,7 +27,8 @@ std::string fmt(double v) { return util::format_number(v, 12); }
 // Step-size control: Hairer's DOP853 takes safety 0.9 and no memory (beta 0); on the paper's
 // moment example 0.8 and beta 0.04 (Hairer's value for stabilized control) reached an error
 // of 1e-4 rad in θ with 20% fewer right-hand sides at NOA 6 and 16% fewer at NOA 20, since a
-// quarter of the steps were rejected at 0.9 (docs/benchmarks.md, work and precision).
+// quarter of the steps were rejected at 0.9; Verner's pair did best with them too (7-8%
+// fewer than at 0.9 and beta 0; docs/benchmarks.md, explicit Runge-Kutta pairs).
 constexpr double kSafety = 0.8;
 constexpr double kBeta = 0.04;      ///< the new step also grows with (previous error)^beta
 constexpr double kMaxShrink = 3.0;  ///< a step is at least a third of the one before
