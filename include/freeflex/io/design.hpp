@@ -64,6 +64,9 @@ inline constexpr double kMaxIntegratorWork = 2e9;
 /// of the output times: about 3 min (designs/suppress_slew.toml with 8 steps: 8 000
 /// steps at NOA 6, 5.9e9, 1.7 s).
 inline constexpr double kMaxGaussWork = 6e11;
+/// A step of the explicit Runge-Kutta pairs ([simulation] method "dop853", "verner98")
+/// counts as this many CVODES steps against kMaxIntegratorWork.
+inline constexpr long kExplicitStepWork = 10;
 inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
 inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
 inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;

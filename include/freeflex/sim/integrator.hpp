@@ -1,7 +1,7 @@
 #pragma once
-// ODE integration with SUNDIALS CVODES (docs/theory.md section 8). The interval is cut
-// at every load discontinuity ("breakpoint"); the integrator is re-initialized exactly
-// there, so no step straddles a jump. Inside one piece the right-hand side is smooth.
+// ODE integration with SUNDIALS CVODES or freeflex's own explicit Runge-Kutta pair
+// (docs/theory.md section 8). The interval is cut at every load discontinuity
+// ("breakpoint"); the integrator is re-initialized exactly there, so no step straddles a jump. Inside one piece the right-hand side is smooth.
 #include <functional>
 #include <string>
 #include <vector>
@@ -59,11 +59,16 @@ struct IntegratorOptions {
   double rtol = 1e-8;   ///< relative tolerance, > 0
   double atol = 1e-10;  ///< absolute tolerance, > 0 (same for every component)
   /// Adams suits the lightly damped oscillations here (fewer steps, no numerical damping
-  /// of energy); BDF suits stiff cases (many functions, heavy damping).
-  enum class Method { Bdf, Adams } method = Method::Adams;
+  /// of energy); BDF suits stiff cases (many functions, heavy damping). Dop853 (Dormand
+  /// and Prince's 8(5,3) pair) and Verner98 (Verner's 9(8) pair) are freeflex's own
+  /// explicit Runge-Kutta methods, not CVODES: cheaper than Adams at equal error when tight
+  /// errors are wanted on a nonstiff problem (docs/theory.md section 8); they ignore
+  /// `max_order` and the Jacobian.
+  enum class Method { Bdf, Adams, Dop853, Verner98 } method = Method::Adams;
   double max_step = 0.0;       ///< 0: no limit [s]
   long max_steps = 1000000;    ///< per output interval (one CVode call); exceeding it is a failure
-  /// Steps of the whole integration (every piece and output interval); 0: no limit.
+  /// Steps of the whole integration (every piece and output interval; accepted steps,
+  /// for every method); 0: no limit.
   /// Spending it is a failure whose message gives the time reached (a work budget: design
   /// files set one from design_limits so that no simulation runs unbounded).
   long max_total_steps = 0;
@@ -81,19 +86,19 @@ void validate(const IntegratorOptions& options);
 /// The outcome of an integration, shared by the simulations built on it.
 enum class IntegrationStatus {
   Completed,   ///< every output time was reached
-  Failed,      ///< CVODE or the right-hand side failed; the message says why and when
+  Failed,      ///< the integrator or the right-hand side failed; the message says why and when
   OutOfRange,  ///< the state left the model's range (OdeSystem::range_check); why and when in the message
 };
 
 struct IntegrationResult {
   IntegrationStatus status = IntegrationStatus::Failed;
-  std::string message;        ///< CVODE's reason when not ok()
+  std::string message;        ///< the integrator's reason when not ok()
   bool ok() const { return status == IntegrationStatus::Completed; }
   double failure_time = 0.0;  ///< time reached when it failed
   Eigen::VectorXd t;          ///< output times actually reached
   Eigen::MatrixXd x;          ///< one row per output time
   Eigen::MatrixXd quadrature; ///< the OdeSystem's integrals at each output time (quadrature_dim columns)
-  long rhs_evaluations = 0;   ///< right-hand side calls (CVODE's count, incl. Jacobian DQ)
+  long rhs_evaluations = 0;   ///< right-hand side calls (incl. CVODE's Jacobian DQ, the dense output's stages)
   long steps = 0;
 };
 
@@ -120,8 +125,11 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
 template <>
 struct EnumNames<IntegratorOptions::Method> {
   static constexpr const char* what = "integration method";
-  static constexpr std::array<std::pair<IntegratorOptions::Method, const char*>, 2> names{
-      {{IntegratorOptions::Method::Bdf, "bdf"}, {IntegratorOptions::Method::Adams, "adams"}}};
+  static constexpr std::array<std::pair<IntegratorOptions::Method, const char*>, 4> names{
+      {{IntegratorOptions::Method::Bdf, "bdf"},
+       {IntegratorOptions::Method::Adams, "adams"},
+       {IntegratorOptions::Method::Dop853, "dop853"},
+       {IntegratorOptions::Method::Verner98, "verner98"}}};
 };
 
 template <>
