@@ -138,6 +138,7 @@ bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end,
     io.rtol = P.rtol;
     io.atol = P.atol;
     io.max_total_steps = P.max_total_steps;
+    io.budget = P.budget;
     const IntegrationResult ir = integrate(sys, Eigen::VectorXd::Zero(2 * N), {0.0, T}, sw, io);
     if (!ir.ok()) {
       P.last_error = ir.message;

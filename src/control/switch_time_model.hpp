@@ -3,6 +3,7 @@
 // residual check both evaluate it: the targeted modes, the rigid end state of a set of
 // interval durations, and the first-order simulation of a design. Private to src/.
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,7 @@ struct Problem {
   TargetModes modes;
   double rtol = 1e-11, atol = 1e-14;
   long max_total_steps = 0;  ///< of each simulation (0: no limit)
+  std::shared_ptr<WorkBudget> budget;  ///< every simulation's (SwitchTimeOptions::budget)
   int simulations = 0;
   std::function<void(int)> progress;  // SwitchTimeOptions::progress
   std::string last_error;

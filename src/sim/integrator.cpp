@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <exception>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -240,6 +241,34 @@ std::vector<FieldProblem> problems(const IntegratorOptions& o) {
 
 void validate(const IntegratorOptions& options) { throw_if_any("integrator options", problems(options)); }
 
+WorkBudget::WorkBudget(long long units, std::string owner) : total_(units), owner_(std::move(owner)) {
+  if (units <= 0) throw std::invalid_argument("WorkBudget: units = " + std::to_string(units) + ", expected > 0");
+}
+
+long long WorkBudget::left() const { return std::max(0LL, total_ - spent_.load()); }
+
+long WorkBudget::steps_left(long long step_work) const {
+  const long long per = std::max(1LL, step_work);
+  return static_cast<long>(std::min<long long>(left() / per, std::numeric_limits<long>::max()));
+}
+
+void WorkBudget::charge(long long units) {
+  if (units > 0) spent_ += units;
+}
+
+std::string WorkBudget::spent_message() const {
+  std::ostringstream os;
+  os << owner_ << "'s work budget of " << total_
+     << " units (CVODES steps weighted by the size of what they integrate; README, the \"(limits)\" row) is spent";
+  return os.str();
+}
+
+long long step_work(long dim, IntegratorOptions::Method method) {
+  const long long N = std::max(1L, dim / 2);
+  const long long w = std::max(N * N, 400LL);
+  return method == IntegratorOptions::Method::Bdf ? 3 * w : w;
+}
+
 bool roundoff_span(double a, double b) {
   return b - a <= 4.0 * DBL_EPSILON * std::max(std::abs(a), std::abs(b)) || b - a < kMinSpan_s;
 }
@@ -387,23 +416,30 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
     result.rhs_evaluations += c.rhs_evaluations + c.linear_rhs_evaluations;
   };
 
+  const long long work = system.step_work > 0 ? system.step_work : step_work(n, options.method);
   // Returns false (and fills the failure fields) when CVode failed or the state went non-finite.
   auto advance = [&](double tout, int& flag) {
-    // With a total budget, this call may take only what is left of it.
-    bool budget_binds = false;
+    // With a total step count or a shared work budget, this call may take only what is left.
+    long limit = options.max_steps;
+    bool total_binds = false;
     if (options.max_total_steps > 0) {
       const long left = options.max_total_steps - result.steps - cv.counters().steps;
-      budget_binds = left < options.max_steps;
-      cv.max_num_steps(std::max(1L, std::min(options.max_steps, left)));
+      total_binds = left < options.max_steps;
+      limit = std::max(1L, std::min(options.max_steps, left));
     }
-    const cvodes::Integrator::Advance step = cv.advance(tout);
+    bool by_budget = false;
+    const cvodes::Integrator::Advance step = cv.advance(tout, limit, options.budget.get(), work, by_budget);
     flag = step.flag;
     const double tret = step.reached;
     if (flag < 0) {
       result.failure_time = tret;
+      if (flag == CV_TOO_MUCH_WORK && by_budget) {
+        result.message = "stopped at t = " + fmt(tret) + ": " + options.budget->spent_message();
+        return false;
+      }
       result.message = "CVODE failed at t = " + fmt(tret) + ": " + cvodes::Integrator::flag_name(flag);
       const std::string why =
-          flag == CV_TOO_MUCH_WORK && budget_binds
+          flag == CV_TOO_MUCH_WORK && total_binds
               ? "the integration's step budget, max_total_steps = " + std::to_string(options.max_total_steps) +
                     ", is spent; the simulated span needs more work than it allows"
               : explain(flag, data, cv.last_error(), options.max_steps);

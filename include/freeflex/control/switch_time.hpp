@@ -26,6 +26,7 @@
 //     system by default, or SLSQP.
 // The residual energy reported is that of the first-order simulation at T.
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,10 @@ struct SwitchTimeOptions {
   double atol = 1e-13;
   /// Steps of each first-order simulation (IntegratorOptions::max_total_steps); 0: no limit.
   long max_steps_per_simulation = 0;
+  /// Optional: the work budget every first-order simulation is charged to
+  /// (IntegratorOptions::budget; a study's, shared with its other integrations). Once it
+  /// is spent each simulation fails at once, and so does the design.
+  std::shared_ptr<WorkBudget> budget;
   /// On the scaled constraints (each modal one is sqrt(E_j / E_rigid)): 1e-7 leaves
   /// E_j / E_rigid ~ 1e-14.
   double constraint_tolerance = 1e-7;
