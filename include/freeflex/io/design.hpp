@@ -55,9 +55,17 @@ inline constexpr double kMaxDerivativeTestUnknowns = 2000;
 inline constexpr double kMaxSecondOrderTestUnknowns = 400;
 /// Doubles of the TV-LQR's stored gains: grid points x actuators x 2 (3 + noa) (400 MB).
 inline constexpr double kMaxGainStorage = 5e7;
-/// Work of one integration (simulation, comparison run, switch-time simulation): CVODES
-/// steps x max(n², 400), n = 3 + model.noa; integrator_step_budget() turns it into steps.
-inline constexpr double kMaxIntegratorWork = 2e9;
+/// Work of one study ([simulation], [controller] with its bang-bang rotations, [lqg]):
+/// the CVODES steps of all its integrations, each weighted by what it integrates
+/// (step_work: max(N², 400) for a model of N = 3 + noa coordinates, three times that with
+/// BDF; riccati_step_work: n³ for the TV-LQR's n = 2N states). Measured 1.4 to 6 ns of
+/// CPU per unit, so at most about 2 min; spending it ends the study as a numerical failure.
+inline constexpr long long kMaxStudyWork = 20000000000LL;
+/// Work of a [sweep]'s samples together (the same units; about 100 min of CPU at the
+/// worst, shared out over threads and ranks): each sample may spend an equal share, at
+/// most kMaxStudyWork, and the design is refused when the samples' least work (one step
+/// per sample interval) exceeds it.
+inline constexpr long long kMaxSweepWork = 1000000000000LL;
 inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
 inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
 inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;
@@ -252,6 +260,10 @@ struct Design {
   std::optional<LqgStudy> lqg;
   std::optional<SweepStudy> sweep;
   std::optional<ExportRequest> exports;  ///< [export] (needs [controller])
+  /// The work budget of each study and of a sweep's samples together (WorkBudget; README,
+  /// the "(limits)" row). Not design keys: a program may lower them (the tests do).
+  long long study_work = design_limits::kMaxStudyWork;
+  long long sweep_work = design_limits::kMaxSweepWork;
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;
@@ -262,8 +274,11 @@ struct Design {
   FlexibleBody body() const;
 };
 
-/// CVODES steps one integration may take at model.noa = `noa` (kMaxIntegratorWork).
-long integrator_step_budget(int noa);
+/// Work units (WorkBudget's) of building the body a [sweep] sample flies, on the paper's
+/// basis: N³ (15 + p) + 400 (1 + noa / 10) p² for N = 3 + noa and p segments and point
+/// masses together (measured 0.05 s at noa 100 and p = 1, 0.56 s at p = 200: 4 ns a unit
+/// or less). Each sample is charged it.
+long long body_build_work(const Design& design);
 
 /// Reads and validates a design file. Throws DesignError (bad content, unreadable file,
 /// not a regular file, larger than design_limits::kMaxFileBytes).
