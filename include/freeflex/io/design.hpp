@@ -35,26 +35,47 @@ inline constexpr double kMinDuration_s = 1e-6;            ///< any duration or h
 inline constexpr double kMaxOutputRows = 200000;          ///< rows of one output series, TV-LQR grid points
 inline constexpr double kMaxTrajectorySamples = 1000000;  ///< samples of the zero-order motion
 inline constexpr int kMaxForceElements = 64;              ///< [[load]] and [[actuator]] tables together
-inline constexpr std::size_t kMaxProfileTimes = 10000;    ///< times_s entries of all load profiles
+/// [[beam.segment]] tables, and [[beam.point_mass]] tables (each count): building a body
+/// costs about p² x (1 + noa / 10) µs for p of them together (0.56 s at 200 and noa 100),
+/// and every study builds one (a [sweep], one per sample).
+inline constexpr int kMaxBeamPieces = 100;
+inline constexpr int kMaxSensors = 64;                    ///< [[sensor]] tables (rows of C)
+inline constexpr std::size_t kMaxProfileTimes = 10000;    ///< times_s entries of all load profiles and motion tables
 inline constexpr int kMaxNoaSweep = 100;                  ///< entries of free_vibration.noa_sweep
 inline constexpr int kMaxModeShapes = 20;                 ///< [[free_vibration.mode_shape]] tables
 inline constexpr int kMaxModeShapePoints = 100000;        ///< points of one mode shape
 inline constexpr double kMaxModeShapeRows = 200000;       ///< points of all mode shapes together
+/// [free_vibration] on the finite-element basis: element-modes (elements x (modes + 2))
+/// of every element model it solves, its NOA sweep with the error estimates' second
+/// models, its mode shapes and spin rates; measured up to 4.2e-5 s of CPU each (2000
+/// quintic elements, 100 modes: 8.4 s), so about 2 min at most.
+inline constexpr double kMaxBasisWork = 3e6;
 inline constexpr int kMaxIntervals = 5000;                ///< collocation intervals (trajopt's max_intervals)
 inline constexpr int kMaxMeshRefinements = 20;            ///< mesh-refinement rounds
 inline constexpr long kMaxIterations = 1000000;           ///< Ipopt max_iter (either key)
 /// Ipopt iterations x NLP unknowns, summed over the mesh-refinement rounds (each round's
 /// mesh at most doubles, up to kMaxIntervals): the optimizer's work, 3.2 to 4 µs of CPU
 /// per unit (measured: 20 and 24 iterations on 5000 intervals, 70 007 unknowns: 4.5 s and
-/// 6.7 s), so about 3 min at the bound.
+/// 6.7 s), so about 3 min at the bound. An elastic maneuver's derivatives count as
+/// max(0, s³/100 - 4 s) more unknowns at each point of s unknowns (fitted: like the rigid
+/// problem's at s = 16, 8 to 13 ms a point and iteration at s = 71, 0.1 to 0.24 s at
+/// s = 211), and the rigid counterpart solved after it adds its own.
 inline constexpr double kMaxIpoptWork = 4.5e7;
+/// An elastic maneuver's NLP: collocation points x (unknowns per point)², bounding the
+/// memory of Ipopt's matrices (about 20 doubles per point and unknown², measured 0.36 GB
+/// at 401 points of 71 unknowns), so about 400 MB.
+inline constexpr double kMaxElasticNlpSize = 2.5e6;
 /// NLP unknowns Ipopt's derivative checker may test: its work grows like n³ for the
 /// first-order test and faster (about n^3.8) for the second-order ones. At these sizes
 /// each takes about 15 s of CPU (docs: README, the "(limits)" row).
 inline constexpr double kMaxDerivativeTestUnknowns = 2000;
 inline constexpr double kMaxSecondOrderTestUnknowns = 400;
-/// Doubles of the TV-LQR's stored gains: grid points x actuators x 2 (3 + noa) (400 MB).
+/// Doubles of the matrices a study keeps along time (400 MB): the TV-LQR's gains (grid
+/// points x actuators x 2 (3 + noa)), the [lqg] filter and digital law, [export]'s model.
 inline constexpr double kMaxGainStorage = 5e7;
+/// [export] "poles": model grid points x n³ for n = 2 (3 + noa) states (two eigenvalue
+/// problems of n x n at each point, measured 3 to 6 ns per n³ each: about 30 s at most).
+inline constexpr double kMaxPolesWork = 2.5e9;
 /// Work of one study ([simulation], [controller] with its bang-bang rotations, [lqg]):
 /// the CVODES steps of all its integrations, each weighted by what it integrates
 /// (step_work: max(N², 400) for a model of N = 3 + noa coordinates, three times that with
