@@ -43,7 +43,7 @@ RunResult run_quietly(const Design& d, const std::string& out_dir = "") {
 
 }  // namespace
 
-TEST_CASE("a [simulation] given exactly its work runs as before; one unit less fails with the time and the reason",
+TEST_CASE("a [simulation] given exactly its work runs as before, one unit less fails with the time and the reason",
           "[app][issue20]") {
   Design d = shipped("paper_force_pulse");
   const RunResult full = run_quietly(d);
@@ -70,12 +70,12 @@ TEST_CASE("a [simulation] given exactly its work runs as before; one unit less f
   CHECK_THAT(cut.message, Contains("perturbation solution: no global error estimate: the run at rtol ") &&
                               Contains("stopped at t = ") &&
                               Contains("the [simulation] study's work budget of ") && Contains("is spent"));
-  CHECK(cut.simulation->work_units <= used - 1);
+  CHECK(cut.simulation->work_units <= used - 1);  // never overspent: a CVode call takes only what is left
   CHECK(cut.simulation->nonlinear->run.ok());  // what ran before stands
   const nlohmann::json summary = nlohmann::json::parse(text_of(out + "/summary.json"));
   CHECK(summary["status"] == "failed");
   CHECK_THAT(summary["message"].get<std::string>(), Contains("the [simulation] study's work budget"));
-  CHECK(summary["studies"]["simulation"]["work_units"].get<long long>() <= used - 1);
+  CHECK(summary["studies"]["simulation"]["work_units"].get<long long>() <= used - 1);  // as above
   std::filesystem::remove_all(out);
 }
 
@@ -100,7 +100,7 @@ TEST_CASE("the [controller] study's budget covers its chain and its bang-bang de
   const RunResult cut = run_quietly(d);
   CHECK(cut.exit_code() == kExitNumericalFailure);
   CHECK(cut.suppression->chain.ok());
-  CHECK(cut.suppression->work_units == chain_work);
+  CHECK(cut.suppression->work_units == chain_work);  // nothing was left to charge
   CHECK_THAT(cut.message, Contains("bang-bang design for 1 modes did not converge") &&
                               Contains("stopped at t = 0: the [controller] study's work budget of ") &&
                               Contains("is spent: not run: the bang-bang rotation for 2 mode(s)"));
@@ -114,7 +114,7 @@ TEST_CASE("the [controller] study's budget covers its chain and its bang-bang de
   CHECK_THAT(half.message, Contains("stopped at t = ") && Contains("the [controller] study's work budget"));
 }
 
-TEST_CASE("a sweep's samples share its budget equally, whatever the threads", "[app][issue20]") {
+TEST_CASE("a sweep's samples share its budget equally, each charged on its own", "[app][issue20]") {
   Design d = load_design(std::string(FREEFLEX_SOURCE_DIR) + "/tests/data/sweep_small.toml");
   REQUIRE(d.sweep);
   const long total = d.sweep->total_samples();
@@ -153,5 +153,5 @@ TEST_CASE("the [lqg] study's filter, digital law and flights share one budget", 
   CHECK(cut.exit_code() == kExitNumericalFailure);
   CHECK_THAT(cut.message, Contains("[lqg]: ") && Contains("stopped at t = ") &&
                               Contains("the [lqg] study's work budget of "));
-  CHECK(cut.lqg->work_units <= d.study_work);
+  CHECK(cut.lqg->work_units <= d.study_work);  // never overspent
 }

@@ -470,13 +470,13 @@ TEST_CASE("a work budget shared by integrations stops the one that spends it and
   CHECK_FALSE(opt.budget->exhausted());
   const auto second = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
   CHECK_FALSE(second.ok());
-  CHECK(second.steps == 400);
-  CHECK(second.failure_time > 0.0);
-  CHECK(second.failure_time < 10.0);
+  CHECK(second.steps == 400);          // exactly what was left
+  CHECK(second.failure_time > 0.0);    // it stopped part way through the span,
+  CHECK(second.failure_time < 10.0);   // at the time it had reached
   CHECK_THAT(second.message, StartsWith("stopped at t = ") && Contains("the test's work budget of ") &&
                                  Contains(" is spent"));
   CHECK(opt.budget->exhausted());
-  CHECK(opt.budget->left() < per_step);
+  CHECK(opt.budget->left() < per_step);  // not one more step's worth
   // a later integration charged to it stops before its first step, at its start
   const auto third = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
   CHECK_FALSE(third.ok());
@@ -489,6 +489,6 @@ TEST_CASE("a work budget shared by integrations stops the one that spends it and
   heavy.step_work = 800;
   const auto fewer = integrate(heavy, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
   CHECK_FALSE(fewer.ok());
-  CHECK(fewer.steps == 400);
+  CHECK(fewer.steps == 400);  // 400 x 800 units
   CHECK_THROWS_WITH(WorkBudget(0, "none"), Contains("units = 0, expected > 0"));
 }
