@@ -41,7 +41,6 @@ Eigen::MatrixXd element_commands(const Excitation& ex, int elements, const Eigen
 SimulationOptions comparison_options(const Design& design) {
   SimulationOptions sim = design.simulation ? design.simulation->options : SimulationOptions{};
   sim.duration_s = design.controller->simulate_until_s;
-  sim.integrator.max_total_steps = integrator_step_budget(design.noa);  // the design's work bound
   if (!design.simulation) {
     sim.output_step_s = 0.005;
     sim.integrator.rtol = 1e-10;
@@ -76,13 +75,10 @@ SuppressionOptions with_progress(SuppressionOptions o, std::ostream* log, std::u
   return o;
 }
 
-/// Integrations' step budgets (integrator_step_budget) the study's switch-time searches share.
-constexpr long kSwitchTimeIntegrations = 4;
-
 /// Bang-bang rotations whose switch times leave the first k modes at rest, in place of
 /// the nominal maneuver's loads: same rotation, same torque level.
 void run_bang_bang(const Design& design, const FlexibleBody& body, const SimulationOptions& sim,
-                   SuppressionStudyResult& r, const StudyLog& study_log) {
+                   SuppressionStudyResult& r, const StudyLog& study_log, std::vector<std::string>& not_run) {
   const BangBangStudy& bb = *design.bang_bang;
   std::ostream* log = study_log.log;
   const int ne = static_cast<int>(body.elements().size());
@@ -105,19 +101,14 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
     warn("[bang_bang]: " + why + ", so none was designed");
     return;
   }
-  // The switch-time searches of the study share four integrations' steps, fixed before any
-  // work: each design may take what the ones before it left (37 s of CPU at worst, noa 17).
-  long search_steps = kSwitchTimeIntegrations * integrator_step_budget(design.noa);
   for (int k : bb.modes) {
-    if (search_steps <= 0) {
-      r.bang_bang.push_back({k, "the study's switch-time steps are spent", std::nullopt});
-      warn("bang-bang design for " + std::to_string(k) + " modes not run: the switch-time searches before it spent " +
-           "the study's " + std::to_string(kSwitchTimeIntegrations) + " integrations' steps");
+    if (sim.integrator.budget && sim.integrator.budget->exhausted()) {
+      not_run.push_back("the bang-bang rotation for " + std::to_string(k) + " mode(s)");
+      r.bang_bang.push_back({k, "not designed: " + sim.integrator.budget->spent_message(), std::nullopt});
       continue;
     }
     SwitchTimeOptions so;
-    so.max_steps_per_simulation = integrator_step_budget(design.noa);
-    so.max_total_steps = search_steps;
+    so.budget = sim.integrator.budget;  // its simulations are charged to the study's work budget
     if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ... " << std::flush;
     ProgressReport progress(log, 0.0);
     so.progress = [&progress](int sims) { progress.note(std::to_string(sims) + " first-order simulations"); };
@@ -126,7 +117,6 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
     if (log) *log << progress.resume() << (sw.ok() ? "done" : "FAILED") << ", duration "
                   << util::format_number(sw.duration_s, 6) << " s (rigid T* " << util::format_number(sw.rigid_duration_s, 6)
                   << " s), residual/rigid peak " << sw.residual_ratio << '\n';
-    search_steps -= sw.steps;
     r.bang_bang.push_back({k, sw.ok() ? "ok" : sw.message, sw});
     if (!sw.ok()) {
       warn("bang-bang design for " + std::to_string(k) + " modes did not converge: " + sw.message);
@@ -183,8 +173,15 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   options.closed_loop.atol = st.closed_loop_atol;
   options.closed_loop_first_order_method = st.closed_loop_first_order_method;
   options.closed_loop_gauss_steps = st.closed_loop_gauss_steps;
+  // every integration of the study (open and closed loops, the TV-LQR's Riccati sweep, the
+  // rigid optimum's chain, the bang-bang designs and runs) is charged to one work budget
+  const auto budget = std::make_shared<WorkBudget>(design.study_work, "the [controller] study");
+  options.simulation.integrator.budget = options.tvlqr.budget = options.closed_loop.budget = budget;
+  std::vector<std::string> not_run;  // what the study left out once the budget was spent
+  r.work_budget_units = budget->total();
   std::unique_ptr<ProgressReport> report;
   r.chain = suppress_vibration(body, problem, with_progress(options, log, report));
+  r.work_units = budget->spent();  // the study may end here
   const SuppressionResult& chain = r.chain;
   using Status = SuppressionResult::Status;
   if (chain.status == Status::HorizonTooShort) {
@@ -228,7 +225,8 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   if (!add_cases(chain, problem, vibration_aware ? "vibration_aware_" : "")) return r;
   if (vibration_aware && !maneuver->rigid_flown)
     fail("the rigid counterpart of the maneuver did not solve: no rigid_optimum rows");
-  if (vibration_aware && maneuver->rigid_flown) {
+  if (vibration_aware && maneuver->rigid_flown && budget->exhausted()) not_run.push_back("the rigid optimum's chain");
+  if (vibration_aware && maneuver->rigid_flown && !budget->exhausted()) {
     SuppressionProblem rp = problem;
     rp.maneuver = maneuver->rigid_flown;
     if (log) *log << "suppression: the rigid optimum, for comparison\n";
@@ -238,7 +236,13 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     else
       add_cases(*r.rigid_chain, rp, "rigid_optimum_");
   }
-  if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log);
+  if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log, not_run);
+  if (!not_run.empty()) {
+    std::string list;
+    for (const auto& w : not_run) list += (list.empty() ? "" : ", ") + w;
+    fail(budget->spent_message() + ": not run: " + list);
+  }
+  r.work_units = budget->spent();
 
   // Metrics of every case against the nominal motion's end.
   MetricTargets targets;
@@ -353,6 +357,8 @@ Json to_json(const Design& design, const SuppressionStudyResult& r) {
   for (const auto& name : design.controller->actuator_names) actuators.push_back(name);
   js["actuators"] = actuators;
   js["horizon_s"] = design.controller->horizon_s;
+  js["work_units"] = r.work_units;  // of the study's budget (README, the "(limits)" row)
+  js["work_budget_units"] = r.work_budget_units;
   js["tvlqr_status"] = chain.law.ok() ? "ok" : chain.law.message;
   js["tvlqr_solve_time_s"] = chain.law.wall_time_s;
   if (r.rigid_chain) js["rigid_optimum_tvlqr_status"] = r.rigid_chain->law.ok() ? "ok" : r.rigid_chain->law.message;

@@ -249,6 +249,7 @@ ClosedLoopResult simulate_closed_loop_first_order(const FirstOrderModel& model, 
     detail::GaussOptions go;
     go.steps = o.gauss_steps;
     go.max_total_steps = o.integrator.max_total_steps;
+    go.budget = o.integrator.budget;
     go.progress = o.integrator.progress;
     ir = detail::integrate_gauss(ls, x0, w.outputs, cuts_within(bp, w.a, w.b), law.t, go);
   } else {

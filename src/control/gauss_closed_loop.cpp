@@ -32,6 +32,12 @@ class Stepper {
     if (o_.max_total_steps > 0 && r_.steps >= o_.max_total_steps)
       return fail(t0, "the integration's step budget, max_total_steps = " + std::to_string(o_.max_total_steps) +
                           ", is spent; the simulated span needs more work than it allows");
+    const long long work = 40LL * n_ * n_ * n_;
+    if (o_.budget && o_.budget->steps_left(work) < 1) {
+      o_.budget->mark_exhausted();
+      return fail(t0, o_.budget->spent_message());
+    }
+    if (o_.budget) o_.budget->charge(work);
     ++r_.steps;
     const int n = n_;
     sys_.pattern(Instant{t0, mid}, x, start_);

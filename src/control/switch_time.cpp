@@ -178,6 +178,7 @@ SwitchTimeResult design_switch_times(const FlexibleBody& body, int actuator, dou
   P.rtol = o.rtol;
   P.atol = o.atol;
   P.max_total_steps = o.max_steps_per_simulation;
+  P.budget = o.budget;
   P.progress = o.progress;
   P.modes = target_modes(body, actuator, rotation_rad, modes, where);
   const double Tstar = 2.0 * std::sqrt(P.I_o * P.dtheta / P.tau);

@@ -152,6 +152,7 @@ bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end,
     const long left = P.max_steps_all > 0 ? P.max_steps_all - P.steps : 0;
     io.max_total_steps = P.max_total_steps > 0 && left > 0 ? std::min(P.max_total_steps, left)
                                                             : std::max(P.max_total_steps, left);
+    io.budget = P.budget;
     const IntegrationResult ir = integrate(sys, Eigen::VectorXd::Zero(2 * N), {0.0, T}, sw, io);
     P.steps += ir.steps;
     P.longest = std::max(P.longest, ir.steps);

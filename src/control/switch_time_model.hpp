@@ -3,6 +3,7 @@
 // residual check both evaluate it: the targeted modes, the rigid end state of a set of
 // interval durations, and the first-order simulation of a design. Private to src/.
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,7 @@ struct Problem {
   // steps together (0: no cap); reaching one sets budget_spent and no simulation runs.
   int max_simulations = 0;
   long max_steps_all = 0;
+  std::shared_ptr<WorkBudget> budget;  ///< every simulation's (SwitchTimeOptions::budget)
   int simulations = 0;
   long steps = 0, longest = 0;  // all steps, and those of the longest simulation
   long closed_form_evaluations = 0;

@@ -200,6 +200,7 @@ TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<d
     res.linear_iterations += c.linear_iterations;
   };
 
+  const long long work = riccati_step_work(n);
   int idx = G - 1;
   if (!record(idx)) return finish(TvlqrResult::Status::IntegrationFailed, d.error);
   --idx;
@@ -214,8 +215,14 @@ TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<d
     cv.stop_time(tau_b);
     while (idx >= 0 && grid[idx] >= a_t) {
       const double tau_out = (grid[idx] == a_t) ? tau_b : tf - grid[idx];
-      const cvodes::Integrator::Advance step = cv.advance(tau_out);
+      bool by_budget = false;
+      const cvodes::Integrator::Advance step = cv.advance(tau_out, o.max_steps, o.budget.get(), work, by_budget);
       const double tret = step.reached;
+      if (step.flag == CV_TOO_MUCH_WORK && by_budget) {
+        add_stats();
+        return finish(TvlqrResult::Status::IntegrationFailed,
+                      "stopped at t = " + fmt(tf - tret) + " s: " + o.budget->spent_message());
+      }
       if (step.flag < 0) {
         add_stats();
         std::string msg = "CVODES failed at t = " + fmt(tf - tret) + " s: " + cvodes::Integrator::flag_name(step.flag);
@@ -241,6 +248,11 @@ TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<d
 }
 
 }  // namespace
+
+long long riccati_step_work(int n) {
+  const long long m = std::max(1, n);
+  return m * m * m;
+}
 
 void validate(const TvlqrOptions& options) {
   const std::string problem = options_problem(options);

@@ -7,7 +7,9 @@
 #include <cfloat>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -74,6 +76,40 @@ std::string detail::user_message(const OdeSystem& system, const char* what) {
 }
 
 void validate(const IntegratorOptions& options) { throw_if_any("integrator options", problems(options)); }
+
+WorkBudget::WorkBudget(long long units, std::string owner) : total_(units), owner_(std::move(owner)) {
+  if (units <= 0) throw std::invalid_argument("WorkBudget: units = " + std::to_string(units) + ", expected > 0");
+}
+
+long long WorkBudget::left() const { return std::max(0LL, total_ - spent_.load()); }
+
+long WorkBudget::steps_left(long long step_work) const {
+  const long long per = std::max(1LL, step_work);
+  return static_cast<long>(std::min<long long>(left() / per, std::numeric_limits<long>::max()));
+}
+
+void WorkBudget::charge(long long units) {
+  if (units > 0) spent_ += units;
+}
+
+std::string WorkBudget::spent_message() const {
+  std::ostringstream os;
+  os << owner_ << "'s work budget of " << total_
+     << " units (integration steps weighted by the size of what they integrate; README, the \"(limits)\" row) is "
+        "spent";
+  return os.str();
+}
+
+long long step_work(long dim, IntegratorOptions::Method method) {
+  const long long N = std::max(1L, dim / 2);
+  const long long w = std::max(N * N, 400LL);
+  switch (method) {
+    case IntegratorOptions::Method::Bdf: return 3 * w;  // Newton iterations with dense solves
+    case IntegratorOptions::Method::Dop853:
+    case IntegratorOptions::Method::Verner98: return 10 * w;  // 12 to 16 right-hand sides a step, Adams 1.5 to 2
+    default: return w;
+  }
+}
 
 bool roundoff_span(double a, double b) {
   return b - a <= 4.0 * DBL_EPSILON * std::max(std::abs(a), std::abs(b)) || b - a < kMinSpan_s;
@@ -203,6 +239,8 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
 
   // Returns false (and fills the failure fields) when the stepper failed or the state went
   // non-finite; `at_stop`: the state is the one at the piece's end.
+  // the work units each step charges to options.budget
+  const long long work = system.step_work > 0 ? system.step_work : step_work(n, options.method);
   auto advance = [&](double tout, bool& at_stop) {
     // With a total budget, this call may take only what is left of it.
     long limit = options.max_steps;
@@ -212,7 +250,7 @@ IntegrationResult integrate(const OdeSystem& system, const Eigen::Ref<const Eige
       budget_binds = left < options.max_steps;
       limit = std::min(options.max_steps, left);
     }
-    const detail::PieceStepper::Outcome step = stepper->advance(tout, limit, budget_binds);
+    const detail::PieceStepper::Outcome step = stepper->advance(tout, limit, budget_binds, options.budget.get(), work);
     at_stop = step.at_stop;
     if (!step.ok) {
       result.failure_time = step.reached;

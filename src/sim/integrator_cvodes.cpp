@@ -231,14 +231,18 @@ class CvodesStepper final : public detail::PieceStepper {
 
   void stop_time(double b) override { cv_.stop_time(b); }
 
-  Outcome advance(double tout, long max_steps, bool budget_binds) override {
-    // With a total budget, this call may take only what is left of it.
-    if (options_.max_total_steps > 0) cv_.max_num_steps(std::max(1L, max_steps));
-    const cvodes::Integrator::Advance step = cv_.advance(tout);
+  Outcome advance(double tout, long max_steps, bool budget_binds, WorkBudget* budget, long long step_work) override {
+    // this call may take only what is left of the integration's steps and of the budget
+    bool by_budget = false;
+    const cvodes::Integrator::Advance step =
+        cv_.advance(tout, std::max(1L, max_steps), budget, step_work, by_budget);
     Outcome out;
     out.reached = step.reached;
     out.at_stop = step.flag == CV_TSTOP_RETURN;
-    if (step.flag < 0) {
+    if (step.flag == CV_TOO_MUCH_WORK && by_budget) {
+      out.ok = false;
+      out.message = "stopped at t = " + fmt(step.reached) + ": " + budget->spent_message();
+    } else if (step.flag < 0) {
       out.ok = false;
       out.message = "CVODE failed at t = " + fmt(step.reached) + ": " + cvodes::Integrator::flag_name(step.flag);
       const std::string why =

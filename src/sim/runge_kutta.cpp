@@ -83,7 +83,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
 
   void stop_time(double b) override { stop_ = b; }
 
-  Outcome advance(double tout, long max_steps, bool budget_binds) override {
+  Outcome advance(double tout, long max_steps, bool budget_binds, WorkBudget* budget, long long step_work) override {
     Outcome out;
     for (long taken = 0;; ++taken) {
       if (tout == t_) {
@@ -105,7 +105,13 @@ class RungeKuttaStepper final : public detail::PieceStepper {
                                           "problem may be stiff (use BDF) or max_steps too small");
         return failed(out, false);
       }
+      if (budget && budget->steps_left(step_work) < 1) {
+        budget->mark_exhausted();
+        out.message = "stopped at t = " + fmt(t_) + ": " + budget->spent_message();
+        return failed(out, false);
+      }
       if (!step()) return failed(out);
+      if (budget) budget->charge(step_work);
     }
     out.reached = tout;
     out.at_stop = tout == stop_ && t_ == stop_;

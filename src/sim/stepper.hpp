@@ -33,7 +33,9 @@ class PieceStepper {
   };
   /// Integrates to tout (not beyond the stop time) in at most `max_steps` steps;
   /// `budget_binds`: that limit is what is left of IntegratorOptions::max_total_steps.
-  virtual Outcome advance(double tout, long max_steps, bool budget_binds) = 0;
+  /// Each step charges `step_work` units to `budget` (null: none); with too few left it
+  /// stops where it is, fails naming the budget, and marks it exhausted.
+  virtual Outcome advance(double tout, long max_steps, bool budget_binds, WorkBudget* budget, long long step_work) = 0;
 
   virtual long steps() const = 0;            ///< since start(), every piece
   virtual long rhs_evaluations() const = 0;  ///< since start(), every piece

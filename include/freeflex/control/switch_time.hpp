@@ -39,6 +39,7 @@
 // max_steps_per_simulation steps; and all their steps together at most max_total_steps.
 // Spending a budget ends the design as not converged, with the reason.
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,10 @@ struct SwitchTimeOptions {
   long max_steps_per_simulation = 0;
   /// Steps of all first-order simulations of one design together; 0: no limit.
   long max_total_steps = 0;
+  /// Optional: the work budget every first-order simulation is charged to
+  /// (IntegratorOptions::budget; a study's, shared with its other integrations). Once it
+  /// is spent each simulation fails at once, and so does the design.
+  std::shared_ptr<WorkBudget> budget;
   /// On the scaled constraints (each modal one is sqrt(E_j / E_rigid)): 1e-7 leaves
   /// E_j / E_rigid ~ 1e-14.
   double constraint_tolerance = 1e-7;

@@ -2,7 +2,9 @@
 // ODE integration with SUNDIALS CVODES or freeflex's own explicit Runge-Kutta pair
 // (docs/theory.md section 8). The interval is cut at every load discontinuity
 // ("breakpoint"); the integrator is re-initialized exactly there, so no step straddles a jump. Inside one piece the right-hand side is smooth.
+#include <atomic>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,39 @@ struct OdeSystem {
   /// answer (why the state is outside the model's range) ends the integration at that
   /// time with IntegrationStatus::OutOfRange. Must not throw.
   std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x)> range_check;
+  /// Work units one step costs, charged to IntegratorOptions::budget; 0: step_work(dim,
+  /// method), right for a model of dim / 2 coordinates. A system whose right-hand side
+  /// costs more per state (matrix equations) says so here.
+  long long step_work = 0;
+};
+
+/// A budget of integration work shared by every integration of a study (README, design
+/// files, the "(limits)" row): each CVODES step charges its system's work units
+/// (step_work). Spending it ends the integration in progress as a failure whose message
+/// gives the time reached and names the budget; every later integration charged to it
+/// stops before its first step. Integrations on several threads may share one.
+class WorkBudget {
+ public:
+  /// `units` > 0; `owner` names it in messages ("the [simulation] study").
+  WorkBudget(long long units, std::string owner);
+  long long total() const { return total_; }
+  long long spent() const { return spent_.load(); }
+  long long left() const;
+  /// Whole steps of `step_work` units that are left (0 when not one).
+  long steps_left(long long step_work) const;
+  void charge(long long units);
+  /// An integration stopped because the budget was spent.
+  bool exhausted() const { return exhausted_.load(); }
+  void mark_exhausted() { exhausted_ = true; }
+  const std::string& owner() const { return owner_; }
+  /// "the [simulation] study's work budget (2e10 units: CVODES steps weighted by ...) is spent"
+  std::string spent_message() const;
+
+ private:
+  long long total_;
+  std::string owner_;
+  std::atomic<long long> spent_{0};
+  std::atomic<bool> exhausted_{false};
 };
 
 struct IntegratorOptions {
@@ -69,14 +104,23 @@ struct IntegratorOptions {
   long max_steps = 1000000;    ///< per output interval (one CVode call); exceeding it is a failure
   /// Steps of the whole integration (every piece and output interval; accepted steps,
   /// for every method); 0: no limit.
-  /// Spending it is a failure whose message gives the time reached (a work budget: design
-  /// files set one from design_limits so that no simulation runs unbounded).
+  /// Spending it is a failure whose message gives the time reached (a bound on this
+  /// integration alone; a study's integrations share `budget` instead).
   long max_total_steps = 0;
   int max_order = 0;           ///< 0: CVODE's default (BDF 5, Adams 12)
   /// Optional: called with each output time once the state there is recorded (for
   /// progress reports on long runs); must not throw.
   std::function<void(double t)> progress;
+  /// Optional: the work budget this integration is charged to (shared with the other
+  /// integrations of a study); spending it is a failure like max_total_steps.
+  std::shared_ptr<WorkBudget> budget;
 };
+
+/// Work units of one CVODES step of an OdeSystem of `dim` states: max(N², 400) for
+/// N = dim / 2 (a model's coordinates: the right-hand side's products and solves are
+/// N x N), three times that with BDF (its Newton iterations and difference-quotient
+/// Jacobians). Measured 1.4 to 6 ns of CPU per unit (README, the "(limits)" row).
+long long step_work(long dim, IntegratorOptions::Method method);
 
 /// Every setting out of range ("rtol = -1, expected a finite value > 0"); empty when valid.
 std::vector<FieldProblem> problems(const IntegratorOptions& options);
