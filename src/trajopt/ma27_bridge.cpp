@@ -76,6 +76,12 @@ extern "C" void ff_ma27ad(ipfint* N, ipfint* NZ, const ipfint* IRN, const ipfint
     std::copy(s.sn_start.begin() + 1, s.sn_start.end(), IKEEP + n);
     std::copy(s.sn_parent.begin(), s.sn_parent.end(), IKEEP + 2 * n);
     *NSTEPS = nsn;
+    // MA27's storage is counted in ints: a factor that Ipopt could not size (with its
+    // margins) is refused here, as a fatal error Ipopt reports, not an overflow
+    if (std::max(s.factor_doubles, s.factor_ints) > INT_MAX / 4) {
+      INFO[0] = -5;
+      return;
+    }
     INFO[4] = clamp_int(s.factor_doubles + 1);  // NRLNEC
     INFO[5] = clamp_int(s.factor_ints + 1);     // NIRNEC
     *OPS = static_cast<double>(s.factor_doubles) * s.max_front;
