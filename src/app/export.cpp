@@ -108,7 +108,7 @@ void write_export(const Design& design, const SuppressionStudyResult& r, RunOutp
     return;
   }
   const TvlqrResult& law = chain.law;
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios);
+  const FlexibleBody body = design.body();  // the law's: the design's basis and stiffening
   const Excitation loads = design.excitation();
   const FirstOrderModel fo(body, *chain.nominal, nominal_element_commands(loads, st.actuators, chain.u0), st.actuators);
   const int N = body.dofs(), n = 2 * N, m = fo.input_size();

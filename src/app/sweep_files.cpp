@@ -47,8 +47,7 @@ void write_lqg(const Design& design, const LqgStudyResult& r, RunOutput& out) {
   }
   out.write(lq.table + ".csv", csv.str());
   // histories: right-tip deflection and vibration energy of each case
-  const FlexibleBody body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios,
-                          design.geometric_stiffening);
+  const FlexibleBody body = design.body();
   const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
   const int N = body.dofs(), n = body.n();
   const Eigen::VectorXd& t = r.cases.front().run.t;

@@ -40,7 +40,7 @@ void fail_study(R& r, const StudyLog& log, const std::string& why) {
 namespace detail {
 
 Flight::Flight(const Design& design, const SuppressionStudyResult& suppression, const ManeuverStudyResult* maneuver)
-    : body(Beam(design.beam), design.noa, design.force_elements(), design.damping_ratios),
+    : body(design.body()),  // the suppression study's: its basis, stiffening and damping
       loads(design.excitation()),
       nominal(suppression.chain.nominal) {
   const ControllerStudy& st = *design.controller;
@@ -396,7 +396,8 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
       }
     }
     try {
-      const FlexibleBody plant(Beam(props), design.noa, design.force_elements(), damping, design.geometric_stiffening);
+      const FlexibleBody plant(Beam(props), design.noa, design.basis, design.force_elements(), damping,
+                               design.geometric_stiffening);
       SampledLoopOptions so;
       so.feedback = sw.feedback;
       so.sample_rate_hz = rate;
