@@ -6,11 +6,19 @@
 // error estimate freeflex reports (a second run at rtol/100, GlobalErrorEstimate), their
 // ratio, CPU time (minimum of `reps` runs) and steps. Prints a Markdown table.
 //
-//   build/bench/bench_accuracy [reps]            the table
+//   build/bench/bench_accuracy [reps] [--only TEXT] [--noa N]...   the table (rows whose
+//       name contains TEXT; NOA 6 over 3 s, 20 and 40 over 1 s; default 3 reps, NOA 6 and 20)
+//   build/bench/bench_accuracy 3 --sweep 1e-4 [--noa N]...   work at an error of 1e-4 rad:
+//       many tolerances, a fit of error against RHS (full model; Adams, DOP853, Verner);
+//       with --rtol x (repeatable) at those tolerances only
+//   build/bench/bench_accuracy 3 --perturbation 1e-8 --noa 20   the perturbation solution's
+//       work by time span and method
 //   build/bench/bench_accuracy --export DIR      model data, right-hand sides at random
 //       states and the reference θ(t), q(t) for scripts/dop853_compare.py (SciPy rows)
 #include <time.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -19,6 +27,7 @@
 #include <iostream>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "freeflex/dynamics/full_model.hpp"
 #include "freeflex/sim/simulate.hpp"
@@ -60,24 +69,39 @@ struct Option {
   bool full;
   IntegratorOptions::Method method;
   SimulationOptions::Variables variables;
+  std::vector<double> rtols;  ///< empty: 1e-6, 1e-8, 1e-10, 1e-12
 };
+
+double load_average() {
+  double l = -1.0;
+  std::ifstream f("/proc/loadavg");
+  f >> l;
+  return l;
+}
 
 SimulationResult run(const Case& c, const Option& op, const SimulationOptions& o) {
   return op.full ? simulate_full(c.body, c.ex, o) : simulate_perturbation(c.body, c.ex, o).total;
 }
 
-void table(int reps) {
+void table(int reps, const std::string& only, const std::vector<int>& noas) {
   using M = IntegratorOptions::Method;
   using V = SimulationOptions::Variables;
-  const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical},
-                         {"full, Adams, modal", true, M::Adams, V::Modal},
-                         {"full, BDF, physical", true, M::Bdf, V::Physical},
-                         {"perturbation, Adams, modal (default)", false, M::Adams, V::Modal},
-                         {"perturbation, Adams, physical", false, M::Adams, V::Physical}};
+  const std::vector<double> tight{1e-6, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12};
+  const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical, {}},
+                         {"full, Adams, modal", true, M::Adams, V::Modal, {}},
+                         {"full, BDF, physical", true, M::Bdf, V::Physical, {}},
+                         {"full, DOP853, physical", true, M::Dop853, V::Physical, tight},
+                         {"full, Verner 9(8), physical", true, M::Verner98, V::Physical, tight},
+                         {"perturbation, Adams, modal (default)", false, M::Adams, V::Modal, {}},
+                         {"perturbation, Adams, physical", false, M::Adams, V::Physical, {}},
+                         {"perturbation, DOP853, modal", false, M::Dop853, V::Modal, {1e-6, 1e-8, 1e-10}},
+                         {"perturbation, DOP853, physical", false, M::Dop853, V::Physical, {1e-6, 1e-8, 1e-10}}};
+  std::cout << "load average at start: " << load_average() << "\n\n";
   std::cout << "| NOA | model, method, variables | rtol | error θ [rad] | estimate θ | ratio | error q | estimate q "
-               "| ratio | CPU [ms] | steps |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
-  for (int noa : {6, 20}) {
-    const double T = noa == 6 ? 3.0 : 1.0;
+               "| ratio | CPU [ms] | steps | RHS |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- "
+               "|\n";
+  for (int noa : noas) {
+    const double T = noa == 20 || noa == 40 ? 1.0 : 3.0;
     const Case c = moment_case(noa);
     // References: each model at rtol 1e-13 with Adams, the full model in physical variables,
     // the perturbation solution in modal ones (in physical variables its error at 1e-12 is
@@ -93,8 +117,10 @@ void table(int reps) {
               << (ref_full.z.col(2) - ref2_full.z.col(2)).cwiseAbs().maxCoeff() << ", q "
               << (ref_full.z.rightCols(noa) - ref2_full.z.rightCols(noa)).cwiseAbs().maxCoeff() << '\n';
     for (const Option& op : opts) {
-      if (noa == 20 && !op.full && op.variables == V::Physical) continue;  // 0.35 s a run; not needed
-      for (double rtol : {1e-6, 1e-8, 1e-10, 1e-12}) {
+      if (!only.empty() && std::string(op.name).find(only) == std::string::npos) continue;
+      if (noa >= 20 && !op.full && op.variables == V::Physical) continue;  // 0.35 s a run; not needed
+      const std::vector<double> rtols = op.rtols.empty() ? std::vector<double>{1e-6, 1e-8, 1e-10, 1e-12} : op.rtols;
+      for (double rtol : rtols) {
         if (op.method == M::Bdf && rtol < 1e-10) continue;  // BDF at 1e-12: minutes
         const SimulationOptions o = options(T, rtol, op.method, op.variables);
         SimulationResult r;
@@ -116,7 +142,113 @@ void table(int reps) {
         const double eq = (r.z.rightCols(noa) - ref.z.rightCols(noa)).cwiseAbs().maxCoeff();
         std::cout << std::setprecision(2) << "| " << noa << " | " << op.name << " | " << rtol << " | " << et << " | "
                   << e.theta_rad << " | " << e.theta_rad / et << " | " << eq << " | " << e.q << " | " << e.q / eq
-                  << " | " << std::setprecision(3) << 1e3 * best << " | " << r.steps << " |" << std::endl;
+                  << " | " << std::setprecision(3) << 1e3 * best << " | " << r.steps << " | " << r.rhs_evaluations
+                  << " |" << std::endl;
+      }
+    }
+  }
+}
+
+/// Work at equal error: the full model at many tolerances (10^(-k/4)), each row's θ error
+/// against the reference, RHS and CPU time; then a least-squares line of log error against
+/// log work through the rows with errors within a factor of 10 of `target` rad (the motion
+/// is sensitive, so single rows scatter by factors of 2-4), read at `target`; the CPU time
+/// there is that many RHS at the median CPU time per RHS of those rows (single CPU times
+/// on the shared machine scatter more than the RHS counts).
+void sweep(int reps, const std::string& only, const std::vector<int>& noas, double target,
+           const std::vector<double>& chosen) {
+  using M = IntegratorOptions::Method;
+  using V = SimulationOptions::Variables;
+  const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical, {}},
+                         {"full, DOP853, physical", true, M::Dop853, V::Physical, {}},
+                         {"full, Verner 9(8), physical", true, M::Verner98, V::Physical, {}}};
+  std::cout << "load average at start: " << load_average() << "\n";
+  for (int noa : noas) {
+    const double T = noa == 20 || noa == 40 ? 1.0 : 3.0;
+    const Case c = moment_case(noa);
+    const SimulationResult ref = simulate_full(c.body, c.ex, options(T, 1e-13, M::Adams, V::Physical));
+    for (const Option& op : opts) {
+      if (!only.empty() && std::string(op.name).find(only) == std::string::npos) continue;
+      std::cout << "\nNOA " << noa << ", " << op.name << ", 0-" << T << " s\n\n| rtol | error θ [rad] | RHS | steps | CPU [ms] |\n"
+                << "| --- | --- | --- | --- | --- |\n";
+      double sx = 0, sy = 0, sxx = 0, sxy = 0;
+      std::vector<double> per_rhs;
+      int m = 0;
+      // rtol 10^(-k/8): NOA 6 needs 1e-9 to 1e-12 for errors near 1e-4 (the motion to 3 s is
+      // sensitive), NOA 20 over 1 s 1e-5 to 1e-9
+      const bool adams = op.method == M::Adams;
+      const int k_first = noa == 6 ? (adams ? 80 : 64) : (adams ? 40 : 32), k_last = noa == 6 ? (adams ? 100 : 92) : 72;
+      std::vector<double> rtols = chosen;
+      if (rtols.empty())
+        for (int k = k_first; k <= k_last; k += 2) rtols.push_back(std::pow(10.0, -k / 8.0));
+      for (double rtol : rtols) {
+        const SimulationOptions o = options(T, rtol, op.method, op.variables);
+        SimulationResult r;
+        double best = 1e300;
+        for (int i = 0; i < reps; ++i) {
+          const double t0 = cpu_seconds();
+          r = run(c, op, o);
+          best = std::min(best, cpu_seconds() - t0);
+        }
+        if (!r.ok()) {
+          std::cout << "| " << rtol << " | failed: " << r.message << " |\n";
+          continue;
+        }
+        const double et = (r.z.col(2) - ref.z.col(2)).cwiseAbs().maxCoeff();
+        std::cout << std::setprecision(3) << "| " << rtol << " | " << std::setprecision(2) << et << " | "
+                  << r.rhs_evaluations << " | " << r.steps << " | " << std::setprecision(3) << 1e3 * best << " |"
+                  << std::endl;
+        if (et < 0.1 * target || et > 10.0 * target) continue;
+        const double x = std::log(static_cast<double>(r.rhs_evaluations)), y = std::log(et);
+        sx += x, sy += y, sxx += x * x, sxy += x * y;
+        per_rhs.push_back(best / r.rhs_evaluations);
+        ++m;
+      }
+      if (m < 3) continue;
+      const double b = (m * sxy - sx * sy) / (m * sxx - sx * sx), a = (sy - b * sx) / m;
+      std::sort(per_rhs.begin(), per_rhs.end());
+      const double rhs_at = std::exp((std::log(target) - a) / b), cpu_per_rhs = per_rhs[per_rhs.size() / 2];
+      std::cout << "\nfit over " << m << " rows: error ~ RHS^" << std::setprecision(3) << b << "; at error " << target
+                << " rad: " << std::setprecision(4) << rhs_at << " RHS, " << 1e3 * rhs_at * cpu_per_rhs
+                << " ms CPU (" << 1e9 * cpu_per_rhs << " ns a RHS)\n";
+    }
+  }
+}
+
+/// The perturbation solution's work by time span (issue 19: NOA 20 under 20 ms at rtol
+/// 1e-8 over 3 s): for each method and variables, RHS, steps and CPU time of runs to 0.5,
+/// 1, 2 and 3 s (the differences are the spans' shares) and the error of the 3 s run
+/// against the same solution at rtol 1e-13 (Adams, modal).
+void perturbation_spans(int reps, const std::vector<int>& noas, double rtol) {
+  using M = IntegratorOptions::Method;
+  using V = SimulationOptions::Variables;
+  const Option opts[] = {{"Adams, modal (default)", false, M::Adams, V::Modal, {}},
+                         {"DOP853, modal", false, M::Dop853, V::Modal, {}},
+                         {"Verner 9(8), modal", false, M::Verner98, V::Modal, {}},
+                         {"Adams, physical", false, M::Adams, V::Physical, {}}};
+  std::cout << "load average at start: " << load_average() << "\n\nrtol " << rtol << ", atol rtol/100\n\n";
+  std::cout << "| NOA | method, variables | to [s] | RHS | steps | CPU [ms] | error θ at 3 s [rad] | error q |\n"
+            << "| --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  for (int noa : noas) {
+    const Case c = moment_case(noa);
+    const SimulationResult ref = simulate_perturbation(c.body, c.ex, options(3.0, 1e-13, M::Adams, V::Modal)).total;
+    for (const Option& op : opts) {
+      for (double T : {0.5, 1.0, 2.0, 3.0}) {
+        const SimulationOptions o = options(T, rtol, op.method, op.variables);
+        SimulationResult r;
+        double best = 1e300;
+        for (int i = 0; i < reps; ++i) {
+          const double t0 = cpu_seconds();
+          r = simulate_perturbation(c.body, c.ex, o).total;
+          best = std::min(best, cpu_seconds() - t0);
+        }
+        std::cout << std::setprecision(3) << "| " << noa << " | " << op.name << " | " << T << " | "
+                  << r.rhs_evaluations << " | " << r.steps << " | " << 1e3 * best << " | ";
+        if (T == 3.0 && r.ok())
+          std::cout << std::setprecision(2) << (r.z.col(2) - ref.z.col(2)).cwiseAbs().maxCoeff() << " | "
+                    << (r.z.rightCols(noa) - ref.z.rightCols(noa)).cwiseAbs().maxCoeff() << " |\n";
+        else
+          std::cout << (r.ok() ? "" : r.message) << " | |\n";
       }
     }
   }
@@ -125,7 +257,7 @@ void table(int reps) {
 /// Model data (JSON), right-hand sides at random states (CSV) and the reference run of the
 /// full model (CSV) for the SciPy comparison.
 void export_case(const std::string& dir) {
-  for (int noa : {6, 20}) {
+  for (int noa : {6, 20, 40}) {
     const double T = noa == 6 ? 3.0 : 1.0;
     const Case c = moment_case(noa);
     const ModalIntegrals& mi = c.body.integrals();
@@ -193,6 +325,34 @@ int main(int argc, char** argv) {
     export_case(argv[2]);
     return 0;
   }
-  table(argc > 1 ? std::atoi(argv[1]) : 3);
+  // [reps] [--only SUBSTRING] [--noa N ...] [--sweep TARGET]
+  int reps = 3;
+  std::string only;
+  std::vector<int> noas;
+  double target = 0.0, pert_rtol = 0.0;
+  std::vector<double> chosen;  // --rtol x (repeatable): the sweep at these tolerances only
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--rtol" && i + 1 < argc)
+      chosen.push_back(std::atof(argv[++i]));
+    else if (a == "--perturbation" && i + 1 < argc)
+      pert_rtol = std::atof(argv[++i]);
+    else if (a == "--sweep" && i + 1 < argc)
+      target = std::atof(argv[++i]);
+    else if (a == "--only" && i + 1 < argc)
+      only = argv[++i];
+    else if (a == "--noa" && i + 1 < argc)
+      noas.push_back(std::atoi(argv[++i]));
+    else
+      reps = std::atoi(argv[i]);
+  }
+  if (noas.empty()) noas = {6, 20};
+  if (pert_rtol > 0.0)
+    perturbation_spans(reps, noas, pert_rtol);
+  else if (target > 0.0)
+    sweep(reps, only, noas, target, chosen);
+  else
+    table(reps, only, noas);
+  std::cout << "\nload average at end: " << load_average() << "\n";
   return 0;
 }

@@ -4,6 +4,8 @@
 // and in physical variables (docs/theory.md section 8), and BDF in physical variables.
 // Reports wall time per simulation and the right-hand-side evaluation count, and an
 // estimate of the floor CVODES sets: its Adams steps on the free oscillation alone.
+// DOP853 and Verner 9(8) (freeflex's explicit Runge-Kutta pairs) in both variables too. FREEFLEX_RTOL=x
+// sets rtol = x, atol = x/100 (as bench_accuracy) for every case.
 // Goal (issue 3): under 20 ms for NOA = 6.
 //   cmake -S . -B build-bench -DFREEFLEX_BUILD_BENCHMARKS=ON && cmake --build build-bench
 //   build-bench/bench/bench_simulation
@@ -38,15 +40,22 @@ Case moment_case(int noa, IntegratorOptions::Method method, bool modal) {
   const auto v = modal ? SimulationOptions::Variables::Modal : SimulationOptions::Variables::Physical;
   c.opt.full_variables = c.opt.first_order_variables = v;
   if (const char* mo = std::getenv("FREEFLEX_MAX_ORDER")) c.opt.integrator.max_order = std::atoi(mo);
+  if (const char* rt = std::getenv("FREEFLEX_RTOL")) {  // atol = rtol / 100, as bench_accuracy
+    c.opt.integrator.rtol = std::atof(rt);
+    c.opt.integrator.atol = c.opt.integrator.rtol * 1e-2;
+  }
   return c;
 }
 
 std::string label(const benchmark::State& state) {
-  return std::string(state.range(1) == 0 ? "bdf" : "adams") + (state.range(2) == 1 ? " modal" : " physical");
+  static const char* const names[] = {"bdf", "adams", "dop853", "verner98"};
+  return std::string(names[state.range(1)]) +
+         (state.range(2) == 1 ? " modal" : " physical");
 }
 
 IntegratorOptions::Method method_of(int64_t m) {
-  return m == 0 ? IntegratorOptions::Method::Bdf : IntegratorOptions::Method::Adams;
+  using M = IntegratorOptions::Method;
+  return m == 0 ? M::Bdf : m == 1 ? M::Adams : m == 2 ? M::Dop853 : M::Verner98;
 }
 
 void BM_full(benchmark::State& state) {
@@ -126,9 +135,11 @@ void BM_cvode_floor(benchmark::State& state) {
 
 }  // namespace
 
-// Arguments: NOA, method (0 BDF, 1 Adams), variables (0 physical, 1 modal).
-#define FREEFLEX_SIM_CASES \
-  ArgsProduct({{6, 20}, {1}, {1, 0}})->Args({6, 0, 0})->Args({20, 0, 0})->Unit(benchmark::kMillisecond)
+// Arguments: NOA, method (0 BDF, 1 Adams, 2 DOP853, 3 Verner 9(8)), variables (0 physical, 1 modal).
+#define FREEFLEX_SIM_CASES                                                                              \
+  ArgsProduct({{6, 20}, {1}, {1, 0}})->Args({6, 0, 0})->Args({20, 0, 0})->Args({6, 2, 0})->Args({20, 2, 0}) \
+      ->Args({6, 2, 1})->Args({20, 2, 1})->Args({6, 3, 0})->Args({20, 3, 0})->Args({6, 3, 1})->Args({20, 3, 1}) \
+      ->Unit(benchmark::kMillisecond)
 BENCHMARK(BM_full)->FREEFLEX_SIM_CASES;
 BENCHMARK(BM_perturbation)->FREEFLEX_SIM_CASES;
 BENCHMARK(BM_cvode_floor)->Arg(6)->Unit(benchmark::kMillisecond);

@@ -1,9 +1,10 @@
 // Benchmark (not a test): the two-thruster slew of tests/trajopt/test_maneuvers.cpp
 // (paper beam 1 m, 1 kg, EI 1; thrusters along body y at both tips, |u| <= 1 N; rest at
 // the origin to rest at (1 m, 0.5 m, 90°) in 3 s at minimum energy), solved from the
-// default guess by Ipopt (tol 1e-8, exact Hessian, MUMPS) at N = 25 ... 800 intervals,
+// default guess by Ipopt (tol 1e-8, exact Hessian) at N = 25 ... 800 intervals,
 // trapezoidal (tr 0), Hermite–Simpson separated (tr 1) and compressed (tr 2, the
-// default). Reports wall time per solve, Ipopt iterations and the time per interval
+// default), the KKT systems factored by freeflex's LDLT (mumps 0, the default) or by
+// MUMPS (mumps 1). Reports wall time per solve, Ipopt iterations and the time per interval
 // (flat when the cost grows linearly in N).
 // Goal: N = 100 Hermite–Simpson under 50 ms; cost no worse than linear in N.
 //
@@ -45,6 +46,7 @@ void BM_slew(benchmark::State& state) {
   TrajoptOptions o;
   o.intervals = static_cast<int>(state.range(0));
   o.transcription = kinds[state.range(1)];
+  o.linear_solver = state.range(2) == 0 ? LinearSolver::Ldlt : LinearSolver::Mumps;
   TrajoptResult r;
   double total_s = 0.0;
   for (auto _ : state) {
@@ -58,7 +60,7 @@ void BM_slew(benchmark::State& state) {
   state.counters["J"] = r.objective;
   state.counters["solve_ms"] = 1e3 * per_solve_s;
   state.counters["us_per_interval"] = 1e6 * per_solve_s / o.intervals;
-  state.SetLabel(to_string(o.transcription));
+  state.SetLabel(std::string(to_string(o.transcription)) + " " + to_string(o.linear_solver));
 }
 
 void BM_elastic_slew(benchmark::State& state) {
@@ -72,6 +74,7 @@ void BM_elastic_slew(benchmark::State& state) {
   TrajoptOptions o;
   o.intervals = static_cast<int>(state.range(0));
   o.transcription = state.range(2) == 1 ? Transcription::HermiteSimpson : Transcription::HermiteSimpsonCompressed;
+  o.linear_solver = state.range(3) == 0 ? LinearSolver::Ldlt : LinearSolver::Mumps;
   TrajoptResult r;
   double total_s = 0.0;
   for (auto _ : state) {
@@ -85,19 +88,19 @@ void BM_elastic_slew(benchmark::State& state) {
   state.counters["n_elastic"] = body.n();
   state.counters["solve_ms"] = 1e3 * per_solve_s;
   state.counters["us_per_interval"] = 1e6 * per_solve_s / o.intervals;
-  state.SetLabel(to_string(o.transcription));
+  state.SetLabel(std::string(to_string(o.transcription)) + " " + to_string(o.linear_solver));
 }
 
 }  // namespace
 
 BENCHMARK(BM_elastic_slew)
-    ->ArgsProduct({{50, 100, 200, 400, 800}, {6}, {1, 2}})
-    ->ArgsProduct({{100}, {2, 4, 8, 10, 12}, {1, 2}})
-    ->ArgNames({"N", "noa", "tr"})
+    ->ArgsProduct({{50, 100, 200, 400, 800}, {6}, {1, 2}, {0, 1}})
+    ->ArgsProduct({{100}, {2, 4, 8, 10, 12}, {1, 2}, {0, 1}})
+    ->ArgNames({"N", "noa", "tr", "mumps"})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_slew)
-    ->ArgsProduct({{25, 50, 100, 200, 400, 800}, {0, 1, 2}})
-    ->ArgNames({"N", "tr"})
+    ->ArgsProduct({{25, 50, 100, 200, 400, 800}, {0, 1, 2}, {0, 1}})
+    ->ArgNames({"N", "tr", "mumps"})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -215,7 +215,10 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("rtol", &TvlqrOptions::rtol)
       .def_readwrite("atol", &TvlqrOptions::atol)
       .def_readwrite("Qf", &TvlqrOptions::Qf)
-      .def_readwrite("breakpoints", &TvlqrOptions::breakpoints);
+      .def_readwrite("breakpoints", &TvlqrOptions::breakpoints)
+      .def_property(
+          "method", [](const TvlqrOptions& o) { return std::string(to_string(o.method)); },
+          [](TvlqrOptions& o, const std::string& s) { o.method = enum_from<TvlqrOptions::Method>("TvlqrOptions.method", s); });
   py::class_<TrajoptOptions>(m, "TrajoptOptions")
       .def(py::init<>())
       .def_readwrite("intervals", &TrajoptOptions::intervals)
@@ -226,12 +229,24 @@ PYBIND11_MODULE(_freeflex, m) {
           "transcription", [](const TrajoptOptions& o) { return std::string(to_string(o.transcription)); },
           [](TrajoptOptions& o, const std::string& s) {
             o.transcription = enum_from<Transcription>("transcription", s);
+          })
+      .def_property(
+          "linear_solver", [](const TrajoptOptions& o) { return std::string(to_string(o.linear_solver)); },
+          [](TrajoptOptions& o, const std::string& s) {
+            o.linear_solver = enum_from<LinearSolver>("linear_solver", s);
           });
   py::class_<SuppressionOptions>(m, "SuppressionOptions")
       .def(py::init<>())
       .def_readwrite("simulation", &SuppressionOptions::simulation)
       .def_readwrite("tvlqr", &SuppressionOptions::tvlqr)
-      .def_readwrite("closed_loop", &SuppressionOptions::closed_loop);
+      .def_readwrite("closed_loop", &SuppressionOptions::closed_loop)
+      .def_property(
+          "closed_loop_first_order_method",
+          [](const SuppressionOptions& o) { return std::string(to_string(o.closed_loop_first_order_method)); },
+          [](SuppressionOptions& o, const std::string& s) {
+            o.closed_loop_first_order_method = enum_from<ClosedLoopMethod>("closed_loop_first_order_method", s);
+          })
+      .def_readwrite("closed_loop_gauss_steps", &SuppressionOptions::closed_loop_gauss_steps);
 
   // ---- results
   py::class_<SimulationResult>(m, "SimulationResult")
@@ -262,6 +277,8 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readonly("P0", &TvlqrResult::P0)
       .def_readonly("Qf", &TvlqrResult::Qf)
       .def_readonly("wall_time_s", &TvlqrResult::wall_time_s)
+      .def_property_readonly("method", [](const TvlqrResult& r) { return std::string(to_string(r.method)); })
+      .def_readonly("steps", &TvlqrResult::steps)
       .def("gain", [](const TvlqrResult& r, double t) {
         finite_or_throw("gain: t", t);
         if (r.K.empty()) throw std::invalid_argument("gain: the TV-LQR has no gains (it failed: " + r.message + ")");
@@ -354,11 +371,16 @@ PYBIND11_MODULE(_freeflex, m) {
   }, py::arg("model"), py::arg("t0"), py::arg("tf"), py::arg("Q"), py::arg("R"), py::arg("options") = TvlqrOptions{});
   auto closed = [](bool full) {
     return [full](const PyFirstOrderModel& f, const TvlqrResult& law, double until_s, Eigen::VectorXd limits,
-                  double output_step_s, const IntegratorOptions& integrator) {
+                  double output_step_s, const IntegratorOptions& integrator, const std::string& method,
+                  int gauss_steps) {
       finite_or_throw("until_s", until_s);
       if (law.K.empty()) throw std::invalid_argument("closed loop: the law has no gains (the TV-LQR failed: " + law.message + ")");
       ClosedLoopOptions co;
       co.integrator = integrator;
+      co.first_order_method = enum_from<ClosedLoopMethod>("method", method);
+      if (full && co.first_order_method != ClosedLoopMethod::Cvodes)
+        throw std::invalid_argument("method = \"" + method + "\": the full model's closed loop is integrated by CVODES only");
+      co.gauss_steps = gauss_steps;
       co.t_begin = 0.0;
       co.t_end = until_s;
       co.output_step_s = output_step_s;
@@ -371,10 +393,14 @@ PYBIND11_MODULE(_freeflex, m) {
   };
   m.def("simulate_closed_loop_first_order", closed(false), py::arg("model"), py::arg("law"), py::arg("until_s"),
         py::arg("limits") = Eigen::VectorXd(), py::arg("output_step_s") = 0.005,
-        py::arg("integrator") = closed_loop_integrator());
+        py::arg("integrator") = closed_loop_integrator(), py::arg("method") = "cvodes",
+        py::arg("gauss_steps") = ClosedLoopOptions{}.gauss_steps,
+        "method: \"cvodes\" (integrator's settings) or \"gauss\" (gauss_steps per interval, ClosedLoopMethod)");
   m.def("simulate_closed_loop_full", closed(true), py::arg("model"), py::arg("law"), py::arg("until_s"),
         py::arg("limits") = Eigen::VectorXd(), py::arg("output_step_s") = 0.005,
-        py::arg("integrator") = closed_loop_integrator());
+        py::arg("integrator") = closed_loop_integrator(), py::arg("method") = "cvodes",
+        py::arg("gauss_steps") = ClosedLoopOptions{}.gauss_steps,
+        "the full model's closed loop is always integrated by CVODES (method must be \"cvodes\")");
 
   // ---- the whole chain in one call
   py::class_<SuppressionProblem>(m, "SuppressionProblem")

@@ -148,6 +148,7 @@ Json to_json(const ManeuverStudyResult& r) {
   j["duration_s"] = t.duration_s;
   j["max_defect"] = t.max_defect;
   j["transcription"] = to_string(t.transcription);
+  j["linear_solver"] = to_string(t.linear_solver);
   j["intervals"] = t.intervals;
   if (r.ok()) {
     Json c = Json::object();

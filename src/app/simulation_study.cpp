@@ -198,8 +198,13 @@ GlobalErrorEstimate estimate_error(const char* what, const SimulationResult& run
   if (!e.available) {
     if (log) *log << " not available (" << e.message << ")\n";
     const std::string w = std::string(what) + ": no global error estimate: " + e.message;
-    r.warnings.push_back(w);
-    if (study_log.warn) study_log.warn(w);
+    const auto& budget = options.integrator.budget;
+    if (budget && budget->exhausted())
+      fail(r, study_log, w);  // the study's work budget ran out in the second run: the study ends there
+    else {
+      r.warnings.push_back(w);
+      if (study_log.warn) study_log.warn(w);
+    }
     return e;
   }
   if (log)
@@ -229,6 +234,15 @@ GlobalErrorEstimate estimate_error(const char* what, const SimulationResult& run
 SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver,
                                            const StudyLog& study_log) {
   const SimulationStudy& st = *design.simulation;
+  // every run of the study, error estimates included, is charged to one work budget
+  SimulationOptions options = st.options;
+  options.integrator.budget = std::make_shared<WorkBudget>(design.study_work, "the [simulation] study");
+  const WorkBudget& budget = *options.integrator.budget;
+  std::vector<std::string> not_run;  // runs left out once the budget is spent
+  auto can_run = [&](const std::string& what) {
+    if (budget.exhausted()) not_run.push_back(what);
+    return !budget.exhausted();
+  };
   const FlexibleBody body = design.body();
   Excitation ex = design.excitation();
   std::optional<PrescribedMotion> motion;
@@ -245,14 +259,14 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
   const double t_off = ex.end_time();
   r.loads_end_s = t_off;
   r.about_maneuver = static_cast<bool>(nominal);
-  r.duration_s = st.options.duration_s;
+  r.duration_s = options.duration_s;
   r.prescribed_motion = static_cast<bool>(motion);
 
   const FullModel full(body);
   if (st.nonlinear) {
-    if (log) *log << "simulation: full nonlinear model, NOA " << n << ", " << st.options.duration_s << " s ... " << std::flush;
-    ProgressReport progress(log, st.options.duration_s);
-    SimulationOptions o = st.options;
+    if (log) *log << "simulation: full nonlinear model, NOA " << n << ", " << options.duration_s << " s ... " << std::flush;
+    ProgressReport progress(log, options.duration_s);
+    SimulationOptions o = options;
     o.integrator.progress = progress.callback();
     o.energy_balance = true;  // the range report's energy balance (full model)
     SimulationStudyResult::Solution s;
@@ -278,24 +292,24 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     } else if (nl.ok()) {
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
     }
-    if (nl.ok() && st.error_estimate)
+    if (nl.ok() && st.error_estimate && can_run("the full nonlinear model's error estimate"))
       s.error_estimate = estimate_error(
-          "full nonlinear model", nl, st.options,
+          "full nonlinear model", nl, options,
           [&](const SimulationOptions& tight) {
             return motion ? simulate_prescribed(body, ex, *motion, tight, false) : simulate_full(body, ex, tight);
           },
           r, study_log);
     r.nonlinear = std::move(s);
   }
-  if (st.compare_stiffening) {
+  if (st.compare_stiffening && can_run("the comparison without / with geometric stiffening")) {
     const FlexibleBody other(Beam(design.beam), design.noa, design.basis, design.force_elements(),
                              design.damping_ratios, !design.geometric_stiffening);
     const FullModel other_full(other);
     const std::string what = std::string("full nonlinear model ") +
                              (other.geometric_stiffening() ? "with" : "without") + " geometric stiffening (comparison)";
     if (log) *log << "simulation: " << what << " ... " << std::flush;
-    ProgressReport progress(log, st.options.duration_s);
-    SimulationOptions o = st.options;
+    ProgressReport progress(log, options.duration_s);
+    SimulationOptions o = options;
     o.integrator.progress = progress.callback();
     o.energy_balance = true;  // the range report's energy balance (full model)
     SimulationStudyResult::Solution s;
@@ -308,14 +322,16 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     }
     if (s.run.status == IntegrationStatus::OutOfRange)
       warn(r, study_log, what + " left its range: " + s.run.message);
+    else if (!s.run.ok() && budget.exhausted())
+      fail(r, study_log, what + " failed: " + s.run.message);  // the study's work budget ran out in it
     else if (!s.run.ok())
       warn(r, study_log, what + " failed: " + s.run.message);
     r.comparison = std::move(s);
   }
-  if (st.perturbation) {
+  if (st.perturbation && can_run("the perturbation solution")) {
     if (log) *log << "simulation: perturbation (zero-order, then first-order) ... " << std::flush;
-    ProgressReport progress(log, st.options.duration_s);
-    SimulationOptions o = st.options;
+    ProgressReport progress(log, options.duration_s);
+    SimulationOptions o = options;
     o.integrator.progress = progress.callback();
     o.energy_balance = true;  // the range report's energy balance (full model)
     SimulationStudyResult::Solution s;
@@ -336,9 +352,9 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     settle(r, study_log, body, s, nullptr, nullptr, "perturbation solution");
     if (pt.ok()) {
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
-      if (st.error_estimate)
+      if (st.error_estimate && can_run("the perturbation solution's error estimate"))
         s.error_estimate = estimate_error(
-            "perturbation solution", pt, st.options,
+            "perturbation solution", pt, options,
             [&](const SimulationOptions& tight) {
               if (motion) return simulate_prescribed(body, ex, *motion, tight, true);
               return (nominal ? simulate_perturbation_about(body, ex, nominal, tight)
@@ -350,6 +366,13 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
     }
     r.perturbation = std::move(s);
   }
+  if (!not_run.empty()) {
+    std::string list;
+    for (const auto& w : not_run) list += (list.empty() ? "" : ", ") + w;
+    fail(r, study_log, budget.spent_message() + ": not run: " + list);
+  }
+  r.work_units = budget.spent();
+  r.work_budget_units = budget.total();
   if (r.nonlinear && r.perturbation && r.nonlinear->run.ok() && r.perturbation->run.ok()) {
     const Eigen::MatrixXd dz = (r.nonlinear->run.z - r.perturbation->run.z).cwiseAbs();
     SimulationStudyResult::Differences diff;
@@ -507,6 +530,8 @@ Json run_stats(const SimulationStudyResult::Solution& s) {
 Json to_json(const SimulationStudyResult& r) {
   Json js = Json::object();
   js["loads_end_s"] = r.loads_end_s;
+  js["work_units"] = r.work_units;  // of the study's budget (README, the "(limits)" row)
+  js["work_budget_units"] = r.work_budget_units;
   js["nominal"] = r.about_maneuver ? "optimized maneuver" : "zero-order simulation";
   js["duration_s"] = r.duration_s;
   js["prescribed_motion"] = r.prescribed_motion;

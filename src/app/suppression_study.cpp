@@ -41,7 +41,6 @@ Eigen::MatrixXd element_commands(const Excitation& ex, int elements, const Eigen
 SimulationOptions comparison_options(const Design& design) {
   SimulationOptions sim = design.simulation ? design.simulation->options : SimulationOptions{};
   sim.duration_s = design.controller->simulate_until_s;
-  sim.integrator.max_total_steps = integrator_step_budget(design.noa);  // the design's work bound
   if (!design.simulation) {
     sim.output_step_s = 0.005;
     sim.integrator.rtol = 1e-10;
@@ -79,7 +78,7 @@ SuppressionOptions with_progress(SuppressionOptions o, std::ostream* log, std::u
 /// Bang-bang rotations whose switch times leave the first k modes at rest, in place of
 /// the nominal maneuver's loads: same rotation, same torque level.
 void run_bang_bang(const Design& design, const FlexibleBody& body, const SimulationOptions& sim,
-                   SuppressionStudyResult& r, const StudyLog& study_log) {
+                   SuppressionStudyResult& r, const StudyLog& study_log, std::vector<std::string>& not_run) {
   const BangBangStudy& bb = *design.bang_bang;
   std::ostream* log = study_log.log;
   const int ne = static_cast<int>(body.elements().size());
@@ -103,14 +102,21 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
     return;
   }
   for (int k : bb.modes) {
+    if (sim.integrator.budget && sim.integrator.budget->exhausted()) {
+      not_run.push_back("the bang-bang rotation for " + std::to_string(k) + " mode(s)");
+      r.bang_bang.push_back({k, "not designed: " + sim.integrator.budget->spent_message(), std::nullopt});
+      continue;
+    }
     SwitchTimeOptions so;
-    so.max_steps_per_simulation = integrator_step_budget(design.noa);
+    so.budget = sim.integrator.budget;  // its simulations are charged to the study's work budget
     if (log) *log << "suppression: bang-bang switch times for " << k << " mode(s) (NLopt) ... " << std::flush;
     ProgressReport progress(log, 0.0);
     so.progress = [&progress](int sims) { progress.note(std::to_string(sims) + " first-order simulations"); };
     const SwitchTimeResult sw = design_switch_times(body, bb.actuator, rotation, limit, k, so);
-    if (log) *log << progress.resume() << (sw.ok() ? "done" : "FAILED") << ", duration " << sw.duration_s << " s (rigid T* "
-                  << sw.rigid_duration_s << " s), residual/rigid peak " << sw.residual_ratio << '\n';
+    // T to 6 digits: the designs lie within 0.1% of T* (the stream prints 3)
+    if (log) *log << progress.resume() << (sw.ok() ? "done" : "FAILED") << ", duration "
+                  << util::format_number(sw.duration_s, 6) << " s (rigid T* " << util::format_number(sw.rigid_duration_s, 6)
+                  << " s), residual/rigid peak " << sw.residual_ratio << '\n';
     r.bang_bang.push_back({k, sw.ok() ? "ok" : sw.message, sw});
     if (!sw.ok()) {
       warn("bang-bang design for " + std::to_string(k) + " modes did not converge: " + sw.message);
@@ -163,10 +169,20 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   SuppressionOptions options;
   options.simulation = comparison_options(design);
   options.tvlqr.grid_step_s = st.grid_step_s;
+  options.tvlqr.method = st.tvlqr_method;
   options.closed_loop.rtol = st.closed_loop_rtol;
   options.closed_loop.atol = st.closed_loop_atol;
+  options.closed_loop_first_order_method = st.closed_loop_first_order_method;
+  options.closed_loop_gauss_steps = st.closed_loop_gauss_steps;
+  // every integration of the study (open and closed loops, the TV-LQR's Riccati sweep, the
+  // rigid optimum's chain, the bang-bang designs and runs) is charged to one work budget
+  const auto budget = std::make_shared<WorkBudget>(design.study_work, "the [controller] study");
+  options.simulation.integrator.budget = options.tvlqr.budget = options.closed_loop.budget = budget;
+  std::vector<std::string> not_run;  // what the study left out once the budget was spent
+  r.work_budget_units = budget->total();
   std::unique_ptr<ProgressReport> report;
   r.chain = suppress_vibration(body, problem, with_progress(options, log, report));
+  r.work_units = budget->spent();  // the study may end here
   const SuppressionResult& chain = r.chain;
   using Status = SuppressionResult::Status;
   if (chain.status == Status::HorizonTooShort) {
@@ -210,7 +226,8 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   if (!add_cases(chain, problem, vibration_aware ? "vibration_aware_" : "")) return r;
   if (vibration_aware && !maneuver->rigid_flown)
     fail("the rigid counterpart of the maneuver did not solve: no rigid_optimum rows");
-  if (vibration_aware && maneuver->rigid_flown) {
+  if (vibration_aware && maneuver->rigid_flown && budget->exhausted()) not_run.push_back("the rigid optimum's chain");
+  if (vibration_aware && maneuver->rigid_flown && !budget->exhausted()) {
     SuppressionProblem rp = problem;
     rp.maneuver = maneuver->rigid_flown;
     if (log) *log << "suppression: the rigid optimum, for comparison\n";
@@ -220,7 +237,13 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     else
       add_cases(*r.rigid_chain, rp, "rigid_optimum_");
   }
-  if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log);
+  if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log, not_run);
+  if (!not_run.empty()) {
+    std::string list;
+    for (const auto& w : not_run) list += (list.empty() ? "" : ", ") + w;
+    fail(budget->spent_message() + ": not run: " + list);
+  }
+  r.work_units = budget->spent();
 
   // Metrics of every case against the nominal motion's end.
   MetricTargets targets;
@@ -295,8 +318,15 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     }
     cmd.panels.push_back(p);
   }
+  // every nominal's open loop and TV-LQR (a vibration-aware maneuver adds its rigid
+  // optimum's): with more than one nominal, the nonlinear model's only, to stay readable
+  auto ends_with = [](const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  const bool several = r.rigid_chain.has_value();
   for (const auto& c : r.cases) {
-    if (c.name != "open_loop" && c.name != "tvlqr") continue;
+    if (!ends_with(c.name, "open_loop") && !ends_with(c.name, "tvlqr")) continue;
+    if (several && c.model != "nonlinear") continue;
     Eigen::MatrixXd h(c.t.size(), 1 + static_cast<Eigen::Index>(st.actuators.size()));
     h.col(0) = c.t;
     std::vector<std::string> header{"t"};
@@ -307,8 +337,10 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     const std::string file = "commands_" + c.name + "_" + c.model + ".csv";
     out.csv(file, header, h);
     for (std::size_t k = 0; k < st.actuators.size(); ++k)
-      cmd.panels[k].series.push_back({file, 1, 2 + static_cast<int>(k), c.name + " (" + c.model + ")",
-                                      c.model == "nonlinear" ? "lines" : "lines dt 2"});
+      cmd.panels[k].series.push_back(
+          {file, 1, 2 + static_cast<int>(k), c.name + " (" + c.model + ")",
+           // dashed: the first-order model's, or the rigid optimum's beside the vibration-aware one it lies on
+           c.model == "nonlinear" && c.name.rfind("rigid_optimum_", 0) != 0 ? "lines" : "lines dt 2"});
   }
   out.plot(cmd, design.plots);
 }
@@ -326,8 +358,12 @@ Json to_json(const Design& design, const SuppressionStudyResult& r) {
   for (const auto& name : design.controller->actuator_names) actuators.push_back(name);
   js["actuators"] = actuators;
   js["horizon_s"] = design.controller->horizon_s;
+  js["work_units"] = r.work_units;  // of the study's budget (README, the "(limits)" row)
+  js["work_budget_units"] = r.work_budget_units;
   js["tvlqr_status"] = chain.law.ok() ? "ok" : chain.law.message;
   js["tvlqr_solve_time_s"] = chain.law.wall_time_s;
+  js["tvlqr_method"] = to_string(chain.law.method);  // the one used ("auto" resolved)
+  js["tvlqr_steps"] = chain.law.steps;
   if (r.rigid_chain) js["rigid_optimum_tvlqr_status"] = r.rigid_chain->law.ok() ? "ok" : r.rigid_chain->law.message;
   if (chain.law.terminal_care) {
     js["terminal_care_residual"] = chain.law.terminal_care->residual;

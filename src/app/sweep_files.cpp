@@ -87,6 +87,8 @@ Json to_json(const Design& design, const LqgStudyResult& r) {
   const LqgStudy& lq = *design.lqg;
   Json j = Json::object();
   j["status"] = r.ok() ? "ok" : r.message;
+  j["work_units"] = r.work_units;  // of the study's budget (README, the "(limits)" row)
+  j["work_budget_units"] = r.work_budget_units;
   j["sample_rate_hz"] = lq.sample_rate_hz;
   Json sensors = Json::array();
   for (const Sensor& s : design.sensors) sensors.push_back(s.name + " (" + to_string(s.type) + ")");
@@ -198,6 +200,10 @@ Json to_json(const Design& design, const SweepStudyResult& r) {
   j["wall_time_s"] = r.wall_time_s;
   j["time_per_sample_s"] = r.time_per_sample_s;
   j["cpu_time_per_sample_s"] = r.cpu_time_per_sample_s;
+  // the work budget (README, the "(limits)" row): filter and digital law, samples flown here
+  j["setup_work_units"] = r.setup_work_units;
+  j["sample_work_units"] = r.sample_work_units;
+  j["work_share_per_sample_units"] = r.work_share_per_sample;
   return j;
 }
 

@@ -23,13 +23,14 @@ struct Flight {
   std::unique_ptr<FirstOrderModel> model;
 };
 
-/// The [lqg] filter of the design's sensors on the nominal first-order model.
-KalmanResult design_filter(const Design& design, const Flight& flight);
+/// The [lqg] filter of the design's sensors on the nominal first-order model; its
+/// discretization is charged to `budget`.
+KalmanResult design_filter(const Design& design, const Flight& flight, std::shared_ptr<WorkBudget> budget);
 /// The digital TV-LQR (solve_discrete_tvlqr) of the [controller]'s weights over its
 /// horizon at `rate`, terminal weight the continuous law's; `model` is reused when it is
-/// the discretization over that horizon at that rate.
+/// the discretization over that horizon at that rate, else one is made, charged to `budget`.
 TvlqrResult design_digital_law(const Design& design, const Flight& flight, const TvlqrResult& continuous, double rate,
-                               const DiscreteLtv* model = nullptr);
+                               std::shared_ptr<WorkBudget> budget, const DiscreteLtv* model = nullptr);
 /// The rigid targets of the metrics: the nominal motion at the end of the runs.
 MetricTargets targets(const Design& design, const Flight& flight);
 

@@ -49,24 +49,29 @@ Flight::Flight(const Design& design, const SuppressionStudyResult& suppression, 
                                             st.actuators);
 }
 
-KalmanResult design_filter(const Design& design, const Flight& f) {
+KalmanResult design_filter(const Design& design, const Flight& f, std::shared_ptr<WorkBudget> budget) {
   const LqgStudy& lq = *design.lqg;
   const Eigen::MatrixXd C = output_matrix(f.body, design.sensors);
   const Eigen::MatrixXd V = measurement_variance(design.sensors, lq.sample_rate_hz).asDiagonal();
   const Eigen::MatrixXd W = lq.process_noise_density.cwiseAbs2().asDiagonal();
   const int n = f.model->state_size();
   const Eigen::MatrixXd P0 = Eigen::MatrixXd::Identity(n, n) * (lq.initial_std * lq.initial_std);
-  return design_kalman(ltv_system(*f.model), C, V, W, P0, 0.0, design.controller->simulate_until_s, lq.sample_rate_hz);
+  DiscretizeOptions o;
+  o.integrator.budget = std::move(budget);
+  return design_kalman(ltv_system(*f.model), C, V, W, P0, 0.0, design.controller->simulate_until_s, lq.sample_rate_hz,
+                       o);
 }
 
 TvlqrResult design_digital_law(const Design& design, const Flight& f, const TvlqrResult& continuous, double rate,
-                               const DiscreteLtv* model) {
+                               std::shared_ptr<WorkBudget> budget, const DiscreteLtv* model) {
   const ControllerStudy& st = *design.controller;
   const std::vector<double> times = sample_times(0.0, st.horizon_s, rate);
   DiscreteLtv own;
   if (!model || model->t != times) {
     const int m = f.model->input_size();
-    own = discretize(ltv_system(*f.model), times, Eigen::MatrixXd::Zero(m, m));
+    DiscretizeOptions o;
+    o.integrator.budget = std::move(budget);
+    own = discretize(ltv_system(*f.model), times, Eigen::MatrixXd::Zero(m, m), o);
     if (!own.ok()) {
       TvlqrResult r;
       r.status = TvlqrResult::Status::IntegrationFailed;
@@ -103,11 +108,14 @@ LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult&
     if (c.model == "nonlinear" && c.name == "open_loop") r.open_loop_energy_J = c.metrics.residual_vibration_energy_J;
     else if (c.model == "nonlinear" && c.name == "tvlqr") r.continuous_energy_J = c.metrics.residual_vibration_energy_J;
   const detail::Flight f(design, suppression, maneuver);
+  // the filter's and the digital law's discretizations and the three flights share one work budget
+  const auto budget = std::make_shared<WorkBudget>(design.study_work, "the [lqg] study");
   if (log.log) *log.log << "lqg: Kalman filter at " << lq.sample_rate_hz << " Hz ... " << std::flush;
-  r.filter = detail::design_filter(design, f);
+  r.filter = detail::design_filter(design, f, budget);
   if (log.log) *log.log << (r.filter.ok() ? "done" : "FAILED") << '\n';
   if (!r.filter.ok()) {
     fail("[lqg]: the Kalman filter failed: " + r.filter.message);
+    r.work_units = budget->spent();
     return r;
   }
   r.final_elastic_std = r.filter.P_post.back().diagonal().segment(3, f.body.n()).cwiseSqrt();
@@ -116,21 +124,29 @@ LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult&
   so.t_end = design.controller->simulate_until_s;
   so.limits = design.controller->limits;
   so.delay_known = lq.delay_known;
+  so.integrator.budget = budget;
   const double out_step = 0.005;  // the [controller]'s comparison step
   const double ratio = out_step * lq.sample_rate_hz;
   so.output_step_s = std::abs(ratio - std::round(ratio)) < 1e-9 && ratio >= 1.0 ? out_step : 0.0;
   const MetricTargets tg = detail::targets(design, f);
   if (log.log) *log.log << "lqg: digital TV-LQR at " << lq.sample_rate_hz << " Hz ... " << std::flush;
-  r.digital_law = detail::design_digital_law(design, f, suppression.chain.law, lq.sample_rate_hz, &r.filter.model);
+  r.digital_law = detail::design_digital_law(design, f, suppression.chain.law, lq.sample_rate_hz, budget, &r.filter.model);
   if (log.log) *log.log << (r.digital_law.ok() ? "done" : "FAILED") << '\n';
   if (!r.digital_law.ok()) {
     fail("[lqg]: the digital TV-LQR failed: " + r.digital_law.message);
+    r.work_units = budget->spent();
     return r;
   }
   using FB = SampledLoopOptions::Feedback;
   const std::vector<std::pair<std::string, FB>> cases{
       {"tvlqr_sampled", FB::FullState}, {"digital_tvlqr", FB::FullState}, {"lqg", FB::Lqg}};
+  r.work_budget_units = budget->total();
+  std::vector<std::string> not_run;  // cases left out once the budget is spent
   for (const auto& [name, feedback] : cases) {
+    if (budget->exhausted()) {
+      not_run.push_back(name);
+      continue;
+    }
     so.feedback = feedback;
     SampledLoopOptions sk = so;
     if (feedback == FB::FullState) sk.delay_known = false;
@@ -148,6 +164,12 @@ LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult&
     c.metrics = response_metrics(f.body, c.run.t, c.run.z, c.run.z_dot, c.run.commands, tg);
     r.cases.push_back(std::move(c));
   }
+  if (!not_run.empty()) {
+    std::string list;
+    for (const auto& w : not_run) list += (list.empty() ? "" : ", ") + w;
+    fail("[lqg]: " + budget->spent_message() + ": not run: " + list);
+  }
+  r.work_units = budget->spent();
   if (log.log) {
     *log.log << "  case               E_vib(end) [J]  mean, last 1 s [J]\n";
     *log.log << "  open_loop          " << std::setw(14) << std::setprecision(4) << r.open_loop_energy_J << '\n';
@@ -300,20 +322,31 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
   const bool lqg = sw.feedback == SampledLoopOptions::Feedback::Lqg;
   const double rate = lqg ? design.lqg->sample_rate_hz : sw.sample_rate_hz;
   KalmanResult filter;
+  // the filter and the digital law within a study's work budget; the samples share the
+  // sweep's out equally (each at most a study's), so that a sample's result does not
+  // depend on how many run beside it
+  const auto setup = std::make_shared<WorkBudget>(design.study_work, "the [sweep] study's filter and digital law");
+  const long total = sw.total_samples();
+  const long long share = std::min(design.study_work, design.sweep_work / std::max(1L, total));
+  std::atomic<long> out_of_work{0};  // samples flown here that spent their share
+  std::atomic<long long> sample_work{0};
+  r.work_share_per_sample = share;
   if (lqg) {
-    filter = detail::design_filter(design, f);
+    filter = detail::design_filter(design, f, setup);
     if (!filter.ok()) {
       fail("[sweep]: the Kalman filter failed: " + filter.message);
+      r.setup_work_units = setup->spent();
       return r;
     }
   }
-  const TvlqrResult law = detail::design_digital_law(design, f, suppression.chain.law, rate, lqg ? &filter.model : nullptr);
+  const TvlqrResult law =
+      detail::design_digital_law(design, f, suppression.chain.law, rate, setup, lqg ? &filter.model : nullptr);
+  r.setup_work_units = setup->spent();
   if (!law.ok()) {
     fail("[sweep]: the digital TV-LQR failed: " + law.message);
     return r;
   }
   const MetricTargets tg = detail::targets(design, f);
-  const long total = sw.total_samples();
   r.samples.resize(static_cast<std::size_t>(total));
 
   // the journal: samples finished by an earlier, interrupted run of this design
@@ -371,9 +404,13 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
       so.limits = design.controller->limits;
       so.delay_known = lqg && design.lqg->delay_known;
       so.output_step_s = 0.0;
+      so.integrator.budget = std::make_shared<WorkBudget>(share, "sample " + std::to_string(index) + " of the [sweep] study");
+      so.integrator.budget->charge(body_build_work(design));  // the plant built above
       const SampledLoopResult run = simulate_sampled_loop(plant, *f.model, f.loads, f.u0, law,
                                                           lqg ? &filter : nullptr, design.sensors, po, so);
       s.ok = run.ok();
+      if (!s.ok && so.integrator.budget->exhausted()) ++out_of_work;
+      sample_work += so.integrator.budget->spent();
       if (s.ok) s.metrics = response_metrics(plant, run.t, run.z, run.z_dot, run.commands, tg);
     } catch (const std::invalid_argument&) {
       s.ok = false;  // a sample the plant cannot be built for (cannot happen for read designs)
@@ -413,6 +450,7 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
   worker();
   for (auto& t : pool) t.join();
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+  r.sample_work_units = sample_work;
   if (ex.ranks > 1) ex.gather(r.samples);
   double cpu = 0.0;
   for (long i : todo) cpu += r.samples[static_cast<std::size_t>(i)].wall_time_s;
@@ -445,7 +483,13 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
   r.p95_J = percentile(sorted, 0.95);
   r.worst_J = sorted.empty() ? std::nan("") : sorted.back();
   r.fraction_meeting = static_cast<double>(meeting) / static_cast<double>(total);
-  if (r.failed > 0) fail("[sweep]: " + std::to_string(r.failed) + " of " + std::to_string(total) + " samples failed");
+  if (r.failed > 0)
+    fail("[sweep]: " + std::to_string(r.failed) + " of " + std::to_string(total) + " samples failed" +
+         (out_of_work > 0 ? "; " + std::to_string(out_of_work.load()) + " of them spent their share of the sweep's work "
+                            "budget (" + std::to_string(share) + " units each: " + std::to_string(design.sweep_work) +
+                            " over " + std::to_string(total) + " samples, at most a study's " +
+                            std::to_string(design.study_work) + "; README, the \"(limits)\" row)"
+                          : std::string()));
   if (log.log)
     *log.log << "  residual vibration energy [J]: mean " << std::setprecision(4) << r.mean_J << ", p5 " << r.p05_J
              << ", median " << r.p50_J << ", p95 " << r.p95_J << ", worst " << r.worst_J << "; meeting <= "

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "control/gauss_closed_loop.hpp"
 #include "freeflex/dynamics/full_model.hpp"
 #include "model/commands.hpp"
 #include "util/format.hpp"
@@ -52,6 +53,8 @@ std::string options_problem(const ClosedLoopOptions& o) {
   if (!o.x1_initial.allFinite()) return "x1_initial has a non-finite entry";
   for (double b : o.breakpoints)
     if (!std::isfinite(b)) return "breakpoints must be finite";
+  if (o.gauss_steps < 1 || o.gauss_steps > 1000)
+    return "gauss_steps = " + std::to_string(o.gauss_steps) + ", expected an integer in [1, 1000]";
   try {
     validate(o.integrator);
   } catch (const std::invalid_argument& e) {
@@ -213,7 +216,45 @@ ClosedLoopResult simulate_closed_loop_first_order(const FirstOrderModel& model, 
   std::vector<double> bp = nom.breakpoints();
   bp.insert(bp.end(), o.breakpoints.begin(), o.breakpoints.end());
   const Eigen::VectorXd x0 = o.x1_initial.size() ? o.x1_initial : Eigen::VectorXd::Zero(nx);
-  const IntegrationResult ir = integrate(sys, x0, w.outputs, cuts_within(bp, w.a, w.b), o.integrator);
+  IntegrationResult ir;
+  if (o.first_order_method == ClosedLoopMethod::Gauss) {
+    // the same equations as linear ones, x1' = M x1 + f for each saturation pattern
+    detail::SaturatedLinearSystem ls;
+    ls.dim = nx;
+    ls.inputs = m;
+    ls.matrices = [&](const Instant& at, const Eigen::VectorXi& p, Eigen::MatrixXd& M, Eigen::VectorXd& f) {
+      const StateSpace& ss = model.state_space(data, at);
+      Eigen::VectorXd u0v = Eigen::VectorXd::Zero(m);
+      if (L.u0) L.u0(at, u0v);
+      Eigen::MatrixXd K = law.gain(at.t);
+      Eigen::VectorXd c = law.feedforward_at(at.t);  // u1 at x1 = 0
+      for (int k = 0; k < m; ++k)
+        if (p(k) != 0) {  // held at its limit: u1 = ±limit − u0, no feedback through it
+          K.row(k).setZero();
+          c(k) = p(k) * L.limits(k) - u0v(k);
+        }
+      M = ss.A;
+      M.noalias() -= ss.B * K;
+      f = ss.g;
+      f.noalias() += ss.B * c;
+      return M.allFinite() && f.allFinite();
+    };
+    ls.pattern = [&](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x1, Eigen::VectorXi& p) {
+      p.setZero(m);
+      if (!L.limits.size()) return;
+      Eigen::VectorXd u0v, dem, app;
+      L.evaluate(at, x1, u0v, dem, app);
+      for (int k = 0; k < m; ++k) p(k) = dem(k) > L.limits(k) ? 1 : dem(k) < -L.limits(k) ? -1 : 0;
+    };
+    detail::GaussOptions go;
+    go.steps = o.gauss_steps;
+    go.max_total_steps = o.integrator.max_total_steps;
+    go.budget = o.integrator.budget;
+    go.progress = o.integrator.progress;
+    ir = detail::integrate_gauss(ls, x0, w.outputs, cuts_within(bp, w.a, w.b), law.t, go);
+  } else {
+    ir = integrate(sys, x0, w.outputs, cuts_within(bp, w.a, w.b), o.integrator);
+  }
 
   ClosedLoopResult r = start_result(ir, m);
   const int T = static_cast<int>(ir.t.size());

@@ -101,6 +101,8 @@ DiscreteLtv discretize(const LtvSystem& system, const std::vector<double>& times
     return yd.allFinite();
   };
   sys.last_error = [] { return std::string("the discretization's right-hand side is not finite"); };
+  // each evaluation is two n x n by n products (AΦ, AQ): charged like a Riccati step
+  sys.step_work = riccati_step_work(n);
 
   DiscreteLtv r;
   r.t = times;

@@ -139,7 +139,7 @@ class ExponentialRiccati {
   std::string reject_reason_;
 
   NodeForm nf_[3];
-  Eigen::MatrixXd work_, scratch_, Abar_, Qform_, WG_, Wk_[3], Wold_, Wend_, Pend_, FPend_, corr_;
+  Eigen::MatrixXd work_, scratch_, corr_mid_, Abar_, Qform_, WG_, Wk_[3], Wold_, Wend_, Pend_, FPend_, corr_;
   Eigen::VectorXd wk_[3], wold_, sold_, wend_, send_, Fsend_, corr_w_;
   Eigen::MatrixXd Nk_[3];
   Eigen::VectorXd nk_[3];

@@ -62,6 +62,10 @@ void validate(const SuppressionOptions& o) {
   validate(sim);
   validate(o.tvlqr);
   validate(o.closed_loop);
+  ClosedLoopOptions co;
+  co.first_order_method = o.closed_loop_first_order_method;
+  co.gauss_steps = o.closed_loop_gauss_steps;
+  validate(co);
 }
 
 SuppressionResult suppress_vibration(const FlexibleBody& body, const SuppressionProblem& p,
@@ -135,6 +139,8 @@ SuppressionResult suppress_vibration(const FlexibleBody& body, const Suppression
   // 4. The law on the first-order model and on the full model.
   ClosedLoopOptions co;
   co.integrator = o.closed_loop;
+  co.first_order_method = o.closed_loop_first_order_method;
+  co.gauss_steps = o.closed_loop_gauss_steps;
   co.t_begin = 0.0;
   co.t_end = p.until_s;
   co.output_step_s = sim.output_step_s;

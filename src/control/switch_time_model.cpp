@@ -111,6 +111,17 @@ void rigid_end(const std::vector<double>& D, double a, double& theta, double& ra
 bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end, double* peak_rate) {
   double T = 0.0;
   const std::vector<double> sw = switches_of(D, T);
+  const bool sims_left = P.max_simulations == 0 || P.simulations < P.max_simulations;
+  const bool steps_left = P.max_steps_all == 0 || P.steps < P.max_steps_all;
+  if (P.budget_spent || !sims_left || !steps_left) {
+    if (!P.budget_spent)
+      P.last_error = sims_left ? "the design's step budget (SwitchTimeOptions::max_total_steps) is spent: " +
+                                     std::to_string(P.steps) + " steps"
+                               : "the simulations allowed per carried root are spent "
+                                 "(SwitchTimeOptions::simulations_per_unknown)";
+    P.budget_spent = true;
+    return false;
+  }
   ++P.simulations;
   if (P.progress) P.progress(P.simulations);
   try {
@@ -137,10 +148,21 @@ bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end,
     io.method = IntegratorOptions::Method::Adams;  // undamped oscillations, not stiff
     io.rtol = P.rtol;
     io.atol = P.atol;
-    io.max_total_steps = P.max_total_steps;
+    // this simulation's steps: its own limit, and what is left of the design's
+    const long left = P.max_steps_all > 0 ? P.max_steps_all - P.steps : 0;
+    io.max_total_steps = P.max_total_steps > 0 && left > 0 ? std::min(P.max_total_steps, left)
+                                                            : std::max(P.max_total_steps, left);
+    io.budget = P.budget;
     const IntegrationResult ir = integrate(sys, Eigen::VectorXd::Zero(2 * N), {0.0, T}, sw, io);
+    P.steps += ir.steps;
+    P.longest = std::max(P.longest, ir.steps);
     if (!ir.ok()) {
       P.last_error = ir.message;
+      if (P.max_steps_all > 0 && P.steps >= P.max_steps_all) {
+        P.last_error += "; the design's step budget (SwitchTimeOptions::max_total_steps) is spent: " +
+                        std::to_string(P.steps) + " steps";
+        P.budget_spent = true;
+      }
       return false;
     }
     x1_end = ir.x.row(ir.x.rows() - 1).transpose();

@@ -3,6 +3,7 @@
 // residual check both evaluate it: the targeted modes, the rigid end state of a set of
 // interval durations, and the first-order simulation of a design. Private to src/.
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -45,13 +46,22 @@ struct Problem {
   TargetModes modes;
   double rtol = 1e-11, atol = 1e-14;
   long max_total_steps = 0;  ///< of each simulation (0: no limit)
+  // Work: caps on the simulations (a count P.simulations may reach) and on all their
+  // steps together (0: no cap); reaching one sets budget_spent and no simulation runs.
+  int max_simulations = 0;
+  long max_steps_all = 0;
+  std::shared_ptr<WorkBudget> budget;  ///< every simulation's (SwitchTimeOptions::budget)
   int simulations = 0;
+  long steps = 0, longest = 0;  // all steps, and those of the longest simulation
+  long closed_form_evaluations = 0;
+  bool budget_spent = false;
   std::function<void(int)> progress;  // SwitchTimeOptions::progress
   std::string last_error;
 };
 
 /// First-order simulation of a design: x1(T) (and the peak rate θ0' if asked); false,
-/// with P.last_error, when it fails.
+/// with P.last_error, when it fails or the work budget is spent (P.budget_spent: no
+/// simulation runs after that).
 bool simulate(Problem& P, const std::vector<double>& D, Eigen::VectorXd& x1_end, double* peak_rate = nullptr);
 
 /// Modal constraints [ω η, η'] / scale of the first-order state at T.

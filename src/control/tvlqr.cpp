@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
-#include <cvodes/cvodes.h>
 
 #include "control/tvlqr_sweep.hpp"
 #include "util/format.hpp"
@@ -162,6 +161,7 @@ TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<d
   sw.result = &res;
   const bool exponential = o.method == TvlqrOptions::Method::Exponential ||
                            (o.method == TvlqrOptions::Method::Auto && n >= TvlqrOptions::kAutoExponentialStates);
+  res.method = exponential ? TvlqrOptions::Method::Exponential : TvlqrOptions::Method::Bdf;
   if (exponential)
     sweep_exponential(sw);
   else
@@ -192,6 +192,11 @@ std::unique_ptr<detail::RotatingFrame> rotating_frame(const FirstOrderModel& mod
 }
 
 }  // namespace
+
+long long riccati_step_work(int n) {
+  const long long m = std::max(1, n);
+  return m * m * m;
+}
 
 void validate(const TvlqrOptions& options) {
   const std::string problem = options_problem(options);

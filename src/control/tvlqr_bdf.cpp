@@ -2,6 +2,8 @@
 // state piece by piece, and the same integrator for single steps of the exponential sweep.
 #include <cmath>
 
+#include <cvodes/cvodes.h>
+
 #include "control/tvlqr_sweep.hpp"
 #include "util/format.hpp"
 
@@ -46,7 +48,11 @@ void record_packed(const Sweep& sw, RiccatiData& d, int idx, const double* y) {
 }
 
 BdfRiccati::BdfRiccati(RiccatiData& d, const TvlqrOptions& o, double tau0, const double* y0)
-    : d_(d), cv_(tri_size(d.n) + d.n + 1, cvodes::Integrator::Method::Bdf, "solve_tvlqr") {
+    : d_(d),
+      cv_(tri_size(d.n) + d.n + 1, cvodes::Integrator::Method::Bdf, "solve_tvlqr"),
+      budget_(o.budget.get()),
+      work_(riccati_step_work(d.n)),
+      max_steps_(o.max_steps) {
   const long dim = cv_.dim();
   std::copy(y0, y0 + dim, cv_.state());
   cv_.init(freeflex_riccati_rhs, tau0, &d);
@@ -71,7 +77,12 @@ std::string BdfRiccati::advance(double tau_a, double tau_b, bool restart, const 
   };
   const long dim = cv_.dim();
   for (std::size_t k = 0; k < taus.size(); ++k) {
-    const cvodes::Integrator::Advance step = cv_.advance(taus[k]);
+    bool by_budget = false;
+    const cvodes::Integrator::Advance step = cv_.advance(taus[k], max_steps_, budget_, work_, by_budget);
+    if (step.flag == CV_TOO_MUCH_WORK && by_budget) {
+      add_stats();
+      return "stopped at t = " + fmt(d_.tf - step.reached) + " s: " + budget_->spent_message();
+    }
     if (step.flag < 0) {
       add_stats();
       std::string msg = "CVODES failed at t = " + fmt(d_.tf - step.reached) + " s: " + cvodes::Integrator::flag_name(step.flag);

@@ -66,6 +66,9 @@ class BdfRiccati {
   RiccatiData& d_;
   cvodes::Integrator cv_;
   std::unique_ptr<DirectSolverContent> direct_;
+  WorkBudget* budget_;  // TvlqrOptions::budget, charged riccati_step_work a step; may be null
+  long long work_;
+  long max_steps_;
   long steps_ = 0, rhs_ = 0, lin_ = 0;
 };
 

@@ -99,9 +99,10 @@ Design parse_design(const std::string& text, const std::string& source) {
   return d;
 }
 
-long integrator_step_budget(int noa) {
-  const double n = 3.0 + noa;
-  return static_cast<long>(lim::kMaxIntegratorWork / std::max(n * n, 400.0));
+long long body_build_work(const Design& d) {
+  const long long N = 3 + d.noa;
+  const long long p = static_cast<long long>(d.beam.segments.size() + d.beam.point_masses.size());
+  return N * N * N * (15 + p) + 40 * (10 + d.noa) * p * p;
 }
 
 Design load_design(const std::string& path) {

@@ -36,6 +36,9 @@ void read_beam(Section& root, Design& d) {
     }
     auto ei = b.number_or_pair("bending_stiffness_Nm2", kStiffness, true);
     if (L && mu && ei) p.segments.push_back({*L, mu->first, ei->first, mu->second, ei->second});
+  } else if (segs.size() > static_cast<std::size_t>(lim::kMaxBeamPieces)) {
+    b.problem("segment", "beam: " + std::to_string(segs.size()) + " [[beam.segment]] tables; at most " +
+                             std::to_string(lim::kMaxBeamPieces) + " (every study builds the body from them)");
   } else {
     bool ok = true;
     for (auto& s : segs) {
@@ -88,7 +91,13 @@ void read_beam(Section& root, Design& d) {
             .value_or(0.0);
     hub.finish();
   }
-  for (auto& s : b.table_array("point_mass")) {
+  auto masses = b.table_array("point_mass");
+  if (masses.size() > static_cast<std::size_t>(lim::kMaxBeamPieces)) {
+    b.problem("point_mass", "beam: " + std::to_string(masses.size()) + " [[beam.point_mass]] tables; at most " +
+                                std::to_string(lim::kMaxBeamPieces) + " (every study builds the body from them)");
+    masses.clear();
+  }
+  for (auto& s : masses) {
     auto pos = s.number("position_m", on_beam, true);
     auto m = s.number("mass_kg", kMassOrZero, true);
     s.finish();

@@ -14,13 +14,12 @@ namespace {
 /// them: ceil(span / step) steps plus the end point.
 double count_of(double span, double step) { return std::ceil(span / step - 1e-9) + 1.0; }
 
-/// A count for messages: whole digits while they are exact, else 3e+15.
+}  // namespace
+
 std::string show_count(double n) {
   if (n < 1e15) return std::to_string(static_cast<long long>(n));
   return shortest(n);
 }
-
-}  // namespace
 
 bool check_count(Section& s, const std::string& key, const std::string& lead, const std::string& other, double span,
                  double step, const std::string& what, double limit, const std::string& advice) {

@@ -89,16 +89,24 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
   const Range tolerance = Range::positive().supported(1e-16, 1.0);
   st.closed_loop_rtol = c.number("closed_loop_rtol", tolerance, false).value_or(st.closed_loop_rtol);
   st.closed_loop_atol = c.number("closed_loop_atol", tolerance, false).value_or(st.closed_loop_atol);
+  st.closed_loop_first_order_method = c.enumerated<ClosedLoopMethod>("closed_loop_first_order_method", false)
+                                          .value_or(st.closed_loop_first_order_method);
+  st.tvlqr_method = c.enumerated<TvlqrOptions::Method>("tvlqr_method", false).value_or(st.tvlqr_method);
+  auto gauss_steps = c.integer("closed_loop_gauss_steps", 1, 1000, false);
+  st.closed_loop_gauss_steps = static_cast<int>(gauss_steps.value_or(st.closed_loop_gauss_steps));
   c.finish();
   outputs.named(c, "figure", st.figure, {".gp", ".png"});
   outputs.named(c, "figure", st.figure + "_commands", {".gp", ".png"});
   outputs.fixed("[controller]", "comparison.csv");
-  for (const char* cs : {"open_loop", "tvlqr"})
-    for (const char* model : {"first_order", "nonlinear"})
-      outputs.fixed("[controller]", std::string("commands_") + cs + "_" + model + ".csv");
-  for (const char* cs : {"open_loop", "tvlqr"})
-    for (const char* model : {"first_order", "nonlinear"})
-      outputs.fixed("[controller]", std::string("case_") + cs + "_" + model + ".csv");
+  // a vibration-aware maneuver's cases carry its name and its rigid optimum's
+  std::vector<std::string> prefixes{""};
+  if (d.maneuver && d.maneuver->problem.elastic) prefixes = {"vibration_aware_", "rigid_optimum_"};
+  for (const std::string& prefix : prefixes)
+    for (const char* cs : {"open_loop", "tvlqr"})
+      for (const char* model : {"first_order", "nonlinear"}) {
+        outputs.fixed("[controller]", "commands_" + prefix + cs + "_" + model + ".csv");
+        outputs.fixed("[controller]", "case_" + prefix + cs + "_" + model + ".csv");
+      }
   if (!root.has("load") && !root.has("maneuver"))
     c.problem("actuators",
               "[controller] needs a nominal motion whose vibration it suppresses: add a [[load]] or a "
@@ -148,6 +156,19 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
           (from_simulation ? "simulation.trajectory_step_s = " : "the default trajectory step ") + shortest(traj_step),
           t_end, traj_step, "samples of the zero-order motion", lim::kMaxTrajectorySamples,
           "shorten simulate_until_s or raise [simulation] trajectory_step_s");
+  }
+  if (have_end && horizon && st.closed_loop_first_order_method == ClosedLoopMethod::Gauss) {
+    // the Gauss closed loop's work: steps per interval of the gain grid and the outputs
+    const double out_step = d.simulation ? d.simulation->options.output_step_s : 0.005;
+    const double intervals = std::ceil(st.horizon_s / st.grid_step_s) + std::ceil(st.simulate_until_s / out_step);
+    const double n = 2.0 * (3 + d.noa), work = intervals * st.closed_loop_gauss_steps * std::pow(5.0 * n, 3);
+    if (work > lim::kMaxGaussWork)
+      c.problem(gauss_steps ? "closed_loop_gauss_steps" : "closed_loop_first_order_method",
+                c.key_path("closed_loop_first_order_method") + " = \"gauss\" with closed_loop_gauss_steps = " +
+                    std::to_string(st.closed_loop_gauss_steps) + " over " + shortest(intervals) +
+                    " intervals (gain grid and outputs) at noa = " + std::to_string(d.noa) + " is " + shortest(work) +
+                    " units of work (steps x (10 (3 + noa))³); at most " + shortest(lim::kMaxGaussWork) +
+                    ": lower closed_loop_gauss_steps, raise grid_step_s or use \"cvodes\"");
   }
   if (d.maneuver) {
     for (int a : d.maneuver->problem.actuators)

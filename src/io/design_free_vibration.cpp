@@ -8,6 +8,43 @@
 #include "io/design_sections.hpp"
 
 namespace freeflex::io_detail {
+namespace {
+
+/// True when the closed-form free-free beam gives the frequencies (one uniform span, no
+/// hub, no payload): the study then estimates no error (has_exact_modes).
+bool plain_uniform(const BeamProperties& p) {
+  for (const auto& s : p.segments)
+    if (s.tapered() || s.mass_per_length_kg_m != p.segments[0].mass_per_length_kg_m ||
+        s.bending_stiffness_Nm2 != p.segments[0].bending_stiffness_Nm2)
+      return false;
+  for (const auto& pm : p.point_masses)
+    if (pm.mass_kg != 0.0) return false;
+  return p.hub_mass_kg == 0.0 && p.hub_rotary_inertia_kgm2 == 0.0;
+}
+
+/// Element-modes (elements x (modes + 2)) of the element models the study solves on the
+/// finite-element basis (as run_free_vibration_study and mode_table build them).
+double basis_work(const Design& d, const FreeVibrationStudy& fv) {
+  const FiniteElementOptions& fe = d.basis.finite_element;
+  const double pieces = static_cast<double>(d.beam.segments.size() + d.beam.point_masses.size());
+  const double E = std::max(static_cast<double>(fe.elements), pieces + 2.0);  // raised to one per interval
+  auto build = [](double elements, double modes) { return elements * (modes + 2.0); };
+  const bool estimate = !plain_uniform(d.beam);
+  const bool clamped = fe.modes == FiniteElementOptions::Modes::ClampedAtReference;
+  double work = 0.0;
+  const std::vector<int> sweep = fv.noa_sweep.empty() ? std::vector<int>{d.noa} : fv.noa_sweep;
+  for (int n : sweep) {
+    work += build(E, n);
+    if (!estimate) continue;
+    if (clamped) work += build(E, 2.0 * n) + build(E, n / 2.0);  // the change to 2n (or from n/2)
+    else work += 2 * fe.elements <= kMaxElements ? build(2.0 * E, n) : build(E / 2.0, n);  // Richardson
+  }
+  for (const auto& m : fv.mode_shapes) work += build(E, m.noa);
+  if (!fv.spin_rates.empty()) work += build(E, d.noa);
+  return work;
+}
+
+}  // namespace
 
 void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
   Section s = root.table("free_vibration");
@@ -66,6 +103,17 @@ void read_free_vibration(Section& root, Design& d, Outputs& outputs) {
                                 " rows; at most " + std::to_string(static_cast<long long>(lim::kMaxModeShapeRows)) +
                                 ": give fewer points or fewer mode shapes");
   s.finish();
+  if (d.basis.kind == BasisOptions::Kind::FiniteElement) {
+    const double work = basis_work(d, fv);
+    if (work > lim::kMaxBasisWork) {
+      const std::string key = s.has("noa_sweep") ? "noa_sweep" : !shapes.empty() ? "mode_shape" : "spin_rates_deg_s";
+      s.problem(key, "free_vibration: the NOA sweep (with the error estimates' second models), mode shapes and spin "
+                     "rates solve element models of " + show_count(work) + " element-modes together (elements x (modes + 2) "
+                     "each, model.elements = " + std::to_string(d.basis.finite_element.elements) + "); at most " +
+                     shortest(lim::kMaxBasisWork) + " (about 2 min of CPU): fewer NOA values or mode shapes, or "
+                     "fewer elements");
+    }
+  }
   d.free_vibration = fv;
 }
 

@@ -53,6 +53,17 @@ double nlp_unknowns(const ManeuverStudy& st, int intervals, int noa) {
          (st.problem.free_time ? 1 : 0);
 }
 
+/// Collocation points of a mesh of `intervals` (states and controls at each).
+double nlp_points(const ManeuverStudy& st, int intervals) {
+  return st.options.transcription == Transcription::HermiteSimpson ? 2.0 * intervals + 1 : intervals + 1.0;
+}
+
+/// Unknowns at each point: the states (with `elastic` the first-order state too) and the controls.
+double point_unknowns(const ManeuverStudy& st, int noa) {
+  const int modes = st.problem.elastic_modes > 0 ? st.problem.elastic_modes : noa;
+  return 6.0 + (st.problem.elastic ? 4.0 + 2.0 * modes : 0.0) + static_cast<double>(st.problem.actuators.size());
+}
+
 /// [maneuver.ipopt]: every entry checked against Ipopt's own registry (name, type, bounds,
 /// valid strings) and against what this build and freeflex allow, all at once, before any
 /// work. The derivative checker becomes TrajoptOptions::derivative_test (first mesh round
@@ -79,10 +90,10 @@ void read_ipopt_options(Section& m, ManeuverStudy& st, Outputs& outputs, int noa
       ip.problem(key, why.rfind("must", 0) == 0 ? lead + ", " + why : lead + " " + why);
       continue;
     }
-    // Debian's Ipopt is built with MUMPS only: any other solver makes Ipopt abort the
-    // whole process (it tries to load libhsl.so)
-    if (key == "linear_solver" && lower_trimmed(value) != "mumps") {
-      ip.problem(key, lead + ", must be \"mumps\" (the only linear solver this Ipopt has)");
+    // the factorization is freeflex's choice ([maneuver] linear_solver): any other Ipopt
+    // solver makes Debian's Ipopt abort the whole process (it tries to load libhsl.so)
+    if (key == "linear_solver") {
+      ip.problem(key, lead + ": choose the factorization with maneuver.linear_solver = \"ldlt\" or \"mumps\"");
       continue;
     }
     if (key == "linear_system_scaling" && lower_trimmed(value) == "mc19") {
@@ -138,23 +149,58 @@ void check_ipopt_work(Section& m, const ManeuverStudy& st, int noa) {
       iterations = std::stoll(value);  // checked against Ipopt's registry: a whole number
       iterations_key = "ipopt.max_iter";
     }
-  double unknowns = 0;
-  for (int r = 0, n = o.intervals; r <= o.mesh_refinements; ++r, n = std::min(2 * n, o.max_intervals))
+  // An elastic maneuver's derivatives (dense first-order blocks) cost like s³/100 - 4 s
+  // more unknowns at each point of s unknowns, nothing below s = 20 (fitted to 3.6 µs per
+  // unknown and iteration at s = 16, 8 to 13 ms a point and iteration at s = 71, 35 ms at
+  // 131, 0.1 to 0.24 s at 211), Ipopt's matrices hold about 20 s² doubles a point, and the
+  // rigid counterpart is solved after it with the same options.
+  const bool elastic = st.problem.elastic;
+  ManeuverStudy rigid = st;
+  rigid.problem.elastic = false;
+  const double s = point_unknowns(st, noa);
+  double unknowns = 0, derivatives = 0, rigid_unknowns = 0, largest = 0;
+  for (int r = 0, n = o.intervals; r <= o.mesh_refinements; ++r, n = std::min(2 * n, o.max_intervals)) {
     unknowns += nlp_unknowns(st, n, noa);
-  const double work = static_cast<double>(iterations) * unknowns;
-  if (work <= lim::kMaxIpoptWork) return;
+    if (!elastic) continue;
+    derivatives += nlp_points(st, n) * std::max(0.0, s * s * s / 100.0 - 4.0 * s);
+    rigid_unknowns += nlp_unknowns(rigid, n, noa);
+    largest = std::max(largest, nlp_points(st, n) * s * s);
+  }
   std::string at = "intervals";
   for (const char* k : {"max_iterations", "intervals", "mesh_refinements"})
     if (m.has(k)) {
       at = k;
       break;
     }
+  if (largest > lim::kMaxElasticNlpSize) {
+    std::string where = "intervals";
+    for (const char* k : {"intervals", "mesh_refinements", "elastic_modes"})
+      if (m.has(k)) {
+        where = k;
+        break;
+      }
+    std::ostringstream os;
+    os << m.key_path("intervals") << " = " << o.intervals << " with mesh_refinements = " << o.mesh_refinements
+       << " gives an elastic NLP of up to " << show_count(largest / (s * s)) << " collocation points of " << shortest(s)
+       << " unknowns each (states and controls): points x unknowns² = " << show_count(largest) << "; at most "
+       << shortest(lim::kMaxElasticNlpSize) << " (about 400 MB of Ipopt's matrices): fewer intervals or "
+       << "mesh_refinements, or fewer elastic_modes";
+    m.problem(where, os.str());
+    return;
+  }
+  const double work = static_cast<double>(iterations) * (unknowns + derivatives + rigid_unknowns);
+  if (work <= lim::kMaxIpoptWork) return;
   std::ostringstream os;
   os << m.key_path(iterations_key) << " = " << iterations << " with intervals = " << o.intervals
-     << " and mesh_refinements = " << o.mesh_refinements << " allows " << shortest(work)
-     << " Ipopt iteration-unknowns (iterations x NLP unknowns, " << shortest(unknowns)
-     << " unknowns over the rounds); at most " << shortest(lim::kMaxIpoptWork)
-     << " (about 3 min of CPU): lower max_iterations, intervals or mesh_refinements";
+     << " and mesh_refinements = " << o.mesh_refinements << " allows " << show_count(std::ceil(work))
+     << " Ipopt iteration-unknowns (iterations x NLP unknowns, " << shortest(unknowns) << " unknowns over the rounds";
+  if (elastic)
+    os << ", the elastic derivatives counted as " << show_count(std::ceil(derivatives))
+       << " more (s³/100 - 4 s at each point of s = " << shortest(s) << " unknowns) and the rigid counterpart's "
+       << shortest(rigid_unknowns);
+  os << "); at most " << shortest(lim::kMaxIpoptWork)
+     << " (about 3 min of CPU): lower max_iterations, intervals or mesh_refinements"
+     << (elastic ? ", or elastic_modes" : "");
   m.problem(at, os.str());
 }
 
@@ -251,6 +297,7 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   report_field_problems(m, problems(p, static_cast<int>(d.loads.size() + d.actuators.size())), keys);
 
   o.transcription = m.enumerated<Transcription>("transcription", false).value_or(o.transcription);
+  o.linear_solver = m.enumerated<LinearSolver>("linear_solver", false).value_or(o.linear_solver);
   o.intervals = static_cast<int>(m.integer("intervals", 1, lim::kMaxIntervals, false).value_or(o.intervals));
   o.mesh_refinements =
       static_cast<int>(m.integer("mesh_refinements", 0, lim::kMaxMeshRefinements, false).value_or(o.mesh_refinements));

@@ -9,7 +9,8 @@ namespace {
 
 /// [motion.theta], [motion.x] or [motion.y]: a spin-up ramp or a table. `unit` is "deg"
 /// (θ, read in degrees, kept in radians) or "m".
-std::optional<MotionProfile> read_profile(Section& m, const std::string& key, const std::string& unit) {
+std::optional<MotionProfile> read_profile(Section& m, const std::string& key, const std::string& unit,
+                                          std::size_t& times) {
   Section s = m.table(key);
   if (!s.present()) return MotionProfile();
   const bool deg = unit == "deg";
@@ -28,7 +29,12 @@ std::optional<MotionProfile> read_profile(Section& m, const std::string& key, co
     const auto v = s.number_array("values_" + unit, Range().supported(-max_value, max_value), true);
     const auto r = s.number_array("rates_" + rate_unit, Range().supported(-max_rate, max_rate), true);
     const auto a = s.number_array("accelerations_" + rate_unit + "2", Range().supported(-1e12, 1e12), true);
-    if (t && v && r && a) {
+    const bool too_many = t && (times += t->size()) > lim::kMaxProfileTimes;
+    if (too_many)
+      s.problem("times_s", s.key_path("times_s") + ": the load profiles and motion tables have " +
+                               std::to_string(times) + " times_s entries up to here; at most " +
+                               std::to_string(lim::kMaxProfileTimes) + " together");
+    if (t && v && r && a && !too_many) {
       auto scaled = [scale](std::vector<double> x) {
         for (double& e : x) e *= scale;
         return x;
@@ -54,9 +60,11 @@ void read_motion(Section& root, Design& d) {
   MotionSpec spec;
   spec.hub_radius_m =
       m.number("hub_radius_m", Range::nonnegative().supported(-kInf, lim::kMaxLength_m), false).value_or(0.0);
-  const auto th = read_profile(m, "theta", "deg");
-  const auto x = read_profile(m, "x", "m");
-  const auto y = read_profile(m, "y", "m");
+  std::size_t times = 0;  // bounded with the load profiles' (design_limits::kMaxProfileTimes)
+  for (const auto& l : d.loads) times += l.profile.times().size();
+  const auto th = read_profile(m, "theta", "deg", times);
+  const auto x = read_profile(m, "x", "m", times);
+  const auto y = read_profile(m, "y", "m", times);
   if (!m.has("theta") && !m.has("x") && !m.has("y"))
     m.problem("theta", "[motion] prescribes nothing: add [motion.theta], [motion.x] or [motion.y]");
   for (const char* other : {"maneuver", "controller", "bang_bang"})

@@ -84,6 +84,9 @@ class Outputs {
 bool check_count(Section& s, const std::string& key, const std::string& lead, const std::string& other, double span,
                  double step, const std::string& what, double limit, const std::string& advice);
 
+/// A count for messages: whole digits while they are exact (below 1e15), else 3e+15.
+std::string show_count(double n);
+
 /// `s` without surrounding blanks, in lower case (how Ipopt compares string option values).
 std::string lower_trimmed(const std::string& s);
 /// `s` without surrounding blanks (how Ipopt reads a value).

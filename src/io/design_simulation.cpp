@@ -28,8 +28,6 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
   // an absolute error of 1 (m, rad, modal amplitude) or more would switch the error control off
   o.integrator.atol = s.number("atol", Range{0.0, 1.0, true, true}, false).value_or(o.integrator.atol);
   o.integrator.max_step = s.number("max_step_s", Range::nonnegative(), false).value_or(o.integrator.max_step);
-  // a work budget, so that no simulation runs unbounded (design_limits::kMaxIntegratorWork)
-  o.integrator.max_total_steps = integrator_step_budget(d.noa);
   o.integrator.method = s.enumerated<IntegratorOptions::Method>("method", false).value_or(o.integrator.method);
   o.full_variables =
       s.enumerated<SimulationOptions::Variables>("full_model_variables", false).value_or(o.full_variables);

@@ -10,9 +10,60 @@ namespace {
 
 const Range kRate = Range::positive().supported(1e-3, 1e6);  // sample rates [Hz]
 
+/// Sample times at `rate` over [0, span], as sample_times() makes them.
+double samples_over(double span, double rate) { return std::ceil(span * rate - 1e-9) + 1.0; }
+
+/// The flights of [lqg] and [sweep] keep every sample's command (a sweep's sample, every
+/// state): at most kMaxOutputRows samples over simulate_until_s. False when refused.
+bool check_flight(Section& s, const Design& d, const std::string& key, const std::string& lead, double rate) {
+  if (!d.controller) return true;
+  return check_count(s, key, lead, "controller.simulate_until_s = " + shortest(d.controller->simulate_until_s),
+                     d.controller->simulate_until_s, 1.0 / rate, "samples of each flight", lim::kMaxOutputRows,
+                     "lower the sample rate or shorten simulate_until_s");
+}
+
+/// Doubles kept per sample by the digital TV-LQR over the horizon: its gains (m n) and,
+/// when it cannot reuse the filter's model (over simulate_until_s), its own
+/// discretization (Φ, Γ, Q_d, d: 2 n² + n (m + 1)).
+double law_doubles_per_sample(const Design& d, bool own_model) {
+  const double n = 2.0 * (3 + d.noa), m = static_cast<double>(d.controller->actuators.size());
+  return n * m + (own_model ? 2.0 * n * n + n * (m + 1.0) : 0.0);
+}
+
+/// The matrices a digital law (and with `filter`, the Kalman filter: its model and P⁻, P⁺,
+/// L at every sample, 4 n² + n (m + p + 1)) keep, bounded like the TV-LQR's gains
+/// (kMaxGainStorage doubles). False when refused.
+bool check_storage(Section& s, const Design& d, const std::string& key, const std::string& lead, double rate,
+                   bool filter) {
+  if (!d.controller) return true;
+  const ControllerStudy& c = *d.controller;
+  const double n = 2.0 * (3 + d.noa), m = static_cast<double>(c.actuators.size());
+  const double p = static_cast<double>(d.sensors.size());
+  const double k_until = samples_over(c.simulate_until_s, rate), k_horizon = samples_over(c.horizon_s, rate);
+  // the law reuses the filter's model only when both cover the same span
+  const bool own_model = !filter || c.simulate_until_s != c.horizon_s;
+  const double doubles = (filter ? k_until * (4.0 * n * n + n * (m + p + 1.0)) : 0.0) +
+                         k_horizon * law_doubles_per_sample(d, own_model);
+  if (doubles <= lim::kMaxGainStorage) return true;
+  s.problem(key, lead + (filter ? " keeps the Kalman filter over controller.simulate_until_s = " +
+                                      shortest(c.simulate_until_s) + " s and" : " keeps") +
+                     " the digital TV-LQR over horizon_s = " + shortest(c.horizon_s) + " s at noa = " +
+                     std::to_string(d.noa) + " (" + shortest(n) + " states): " + show_count(std::ceil(doubles)) +
+                     " doubles; at most " + shortest(lim::kMaxGainStorage) +
+                     " (400 MB): lower the sample rate, shorten the spans or lower noa");
+  return false;
+}
+
 void read_sensors(Section& root, Design& d) {
   const double length = beam_length(d);
-  for (Section& s : root.table_array("sensor")) {
+  std::vector<Section> sensors = root.table_array("sensor");
+  // each is a row of C: the filter's gain and innovation are p x p and n x p at every sample
+  if (sensors.size() > static_cast<std::size_t>(lim::kMaxSensors)) {
+    root.problem("sensor", std::to_string(sensors.size()) + " [[sensor]] tables; at most " +
+                               std::to_string(lim::kMaxSensors));
+    return;
+  }
+  for (Section& s : sensors) {
     Sensor sensor;
     auto name = s.string("name", true, true);
     auto type = s.enumerated<Sensor::Type>("type", true);
@@ -74,6 +125,10 @@ void read_lqg(Section& root, Design& d, Outputs& outputs) {
   outputs.fixed("[lqg]", st.table + "_history.csv");
   if (!root.has("controller")) s.problem("sample_rate_hz", "[lqg] flies the [controller]'s TV-LQR: add a [controller]");
   if (d.sensors.empty()) s.problem("sample_rate_hz", "[lqg] needs at least one [[sensor]]");
+  const std::string lead = s.key_path("sample_rate_hz") + " = " + shortest(st.sample_rate_hz) +
+                           (s.has("sample_rate_hz") ? "" : " (the default)");
+  if (check_flight(s, d, "sample_rate_hz", lead, st.sample_rate_hz))
+    check_storage(s, d, "sample_rate_hz", lead, st.sample_rate_hz, true);
   d.lqg = st;
 }
 
@@ -173,6 +228,34 @@ void read_sweep(Section& root, Design& d, Outputs& outputs) {
   if (!root.has("controller")) s.problem("samples", "[sweep] flies the [controller]'s TV-LQR: add a [controller]");
   if (st.feedback == SampledLoopOptions::Feedback::Lqg && !root.has("lqg"))
     s.problem("feedback", s.key_path("feedback") + " = \"lqg\" needs an [lqg] section (the filter's settings)");
+  // the samples fly at the [lqg]'s rate with its filter (bounded there) or at this rate
+  const bool lqg = st.feedback == SampledLoopOptions::Feedback::Lqg;
+  if (d.controller && (!lqg || d.lqg)) {
+    const double rate = lqg ? d.lqg->sample_rate_hz : st.sample_rate_hz;
+    const std::string key = lqg || !s.has("sample_rate_hz") ? "samples" : "sample_rate_hz";
+    const std::string lead = lqg ? s.key_path("feedback") + " = \"lqg\" at lqg.sample_rate_hz = " + shortest(rate)
+                                 : s.key_path("sample_rate_hz") + " = " + shortest(rate) +
+                                       (s.has("sample_rate_hz") ? "" : " (the default)");
+    // with "lqg" the flights and the filter are bounded at [lqg] sample_rate_hz (reported there)
+    const bool bounded = lqg ? samples_over(d.controller->simulate_until_s, rate) <= lim::kMaxOutputRows
+                             : check_flight(s, d, key, lead, rate) && check_storage(s, d, key, lead, rate, false);
+    if (bounded) {
+      // the least work of the samples: one step per sample interval and the plant built
+      const double intervals = samples_over(d.controller->simulate_until_s, rate) - 1.0;
+      const double per_sample = intervals * static_cast<double>(step_work(2 * (3 + d.noa), IntegratorOptions::Method::Adams)) +
+                                static_cast<double>(body_build_work(d));
+      const double least = per_sample * static_cast<double>(st.total_samples());
+      if (least > static_cast<double>(lim::kMaxSweepWork))
+        s.problem("samples", s.key_path("samples") + " = " + std::to_string(st.samples) + " gives " +
+                                 std::to_string(st.total_samples()) + " samples of " + show_count(intervals) +
+                                 " sample intervals each (" + lead + "), at least " + show_count(std::ceil(least)) +
+                                 " work units (one step per interval and the plant built, " +
+                                 show_count(std::ceil(per_sample)) + " a sample); at most " +
+                                 shortest(static_cast<double>(lim::kMaxSweepWork)) +
+                                 " for a sweep (README, the \"(limits)\" row): fewer samples, a lower rate or a "
+                                 "shorter simulate_until_s");
+    }
+  }
   d.sweep = st;
 }
 

@@ -56,6 +56,30 @@ std::string quoted(const std::string& s) {
   return q + "'";
 }
 
+/// A title as a gnuplot string expression, broken at blanks into lines that fit a figure
+/// `width_px` wide (about 8 px a character at Sans 10), at most three ('...' after them).
+std::string title_text(const std::string& s, int width_px) {
+  const std::string text = figure_text(s);
+  const std::size_t width = static_cast<std::size_t>(std::max(40, width_px / 8));
+  std::vector<std::string> lines;
+  std::size_t at = 0;
+  while (at < text.size() && lines.size() < 3) {
+    std::size_t end = text.size();
+    if (end - at > width) {
+      const std::size_t blank = text.rfind(' ', at + width);
+      end = blank != std::string::npos && blank > at ? blank : at + width;
+      while (end < text.size() && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) ++end;  // whole UTF-8 characters
+    }
+    lines.push_back(text.substr(at, end - at));
+    at = end;
+    while (at < text.size() && text[at] == ' ') ++at;
+  }
+  if (at < text.size()) lines.back() += "...";
+  std::string expr = quoted(lines.empty() ? std::string() : lines.front());
+  for (std::size_t i = 1; i < lines.size(); ++i) expr += ".\"\\n\"." + quoted(lines[i]);
+  return expr;
+}
+
 std::string seconds_text(double s) {
   std::ostringstream os;
   os << s;
@@ -89,9 +113,9 @@ PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotO
      << "set datafile separator ','\n"
      << "set grid\nset key outside right top noenhanced\nset termoption noenhanced\n";
   if (panels > 1)
-    gp << "set multiplot layout " << panels << ",1 title " << quoted(spec.title) << "\n";
+    gp << "set multiplot layout " << panels << ",1 title " << title_text(spec.title, spec.width_px) << "\n";
   else
-    gp << "set title " << quoted(spec.title) << "\n";
+    gp << "set title " << title_text(spec.title, spec.width_px) << "\n";
   for (const auto& p : spec.panels) {
     if (panels > 1) gp << "set title " << quoted(p.title) << "\n";
     gp << (p.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '% h'\n");

@@ -133,6 +133,38 @@ Integrator::Advance Integrator::advance(double tout) {
   return {flag, reached};
 }
 
+Integrator::Advance Integrator::advance(double tout, long max_steps, WorkBudget* budget, long long step_work,
+                                        bool& by_budget) {
+  by_budget = false;
+  long allowed = max_steps;
+  if (budget) {
+    const long left = budget->steps_left(step_work);
+    if (left < allowed) {
+      allowed = left;
+      by_budget = true;
+    }
+  }
+  if (allowed < 1) {  // CVODE takes a limit <= 0 for its default of 500 steps
+    sunrealtype now = 0.0;
+    check(CVodeGetCurrentTime(mem_, &now), "CVodeGetCurrentTime");
+    if (tout > now) {  // (time runs forward in every integration here)
+      budget->mark_exhausted();
+      return {CV_TOO_MUCH_WORK, now};
+    }
+    allowed = 1;  // tout lies within the last step: CVODE interpolates, no step is taken
+  }
+  max_num_steps(allowed);
+  long before = 0, after = 0;
+  check(CVodeGetNumSteps(mem_, &before), "CVodeGetNumSteps");
+  const Advance a = advance(tout);
+  if (budget) {
+    check(CVodeGetNumSteps(mem_, &after), "CVodeGetNumSteps");
+    budget->charge(static_cast<long long>(after - before) * step_work);
+    if (a.flag == CV_TOO_MUCH_WORK && by_budget) budget->mark_exhausted();
+  }
+  return a;
+}
+
 Counters Integrator::counters() const {
   Counters c;
   check(CVodeGetNumSteps(mem_, &c.steps), "CVodeGetNumSteps");

@@ -14,6 +14,8 @@
 
 #include <string>
 
+#include "freeflex/sim/integrator.hpp"  // WorkBudget
+
 namespace freeflex::cvodes {
 
 static_assert(sizeof(sunrealtype) == sizeof(double), "freeflex needs SUNDIALS built with double precision");
@@ -84,6 +86,12 @@ class Integrator {
     double reached;
   };
   Advance advance(double tout);
+  /// One CVode call towards `tout` of at most `max_steps` (> 0) steps and of what `budget`
+  /// (null: none) has left at `step_work` units a step, charged to it with the steps
+  /// taken. With not one step left it does not call CVode: CV_TOO_MUCH_WORK at the current
+  /// time. `by_budget` says whether the budget bound this call (a CV_TOO_MUCH_WORK is then
+  /// its doing, and the budget is marked exhausted).
+  Advance advance(double tout, long max_steps, WorkBudget* budget, long long step_work, bool& by_budget);
   Counters counters() const;
 
   /// CVODE's last error message ("CVODES::CVode: ..."), empty if none.

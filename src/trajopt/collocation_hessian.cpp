@@ -63,8 +63,18 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
     if (free_time()) Y_.col(q - 1).head(nx) = (sg / 8.0) * (f_.col(k) - f_.col(k + 1));
     Eigen::MatrixXd& Hbuf_ = c.dyn.H;
     dyn_.calc_hessian(c.dyn, xc_.col(k), w.segment(mid_control_offset(k), nu_), lam);
-    Hbuf_ *= s;
-    B_.noalias() = Y_.transpose() * Hbuf_ * Y_;
+    // only the rows H can use take part (a rigid model's H lives on θ and the commands)
+    const int na = static_cast<int>(h_rows_.size());
+    c.Ya.resize(na, q);
+    c.Ha.resize(na, na);
+    for (int i = 0; i < na; ++i) {
+      c.Ya.row(i) = Y_.row(h_rows_[i]);
+      for (int j = 0; j < na; ++j) c.Ha(i, j) = s * Hbuf_(h_rows_[i], h_rows_[j]);
+    }
+    c.HaYa.noalias() = c.Ha * c.Ya;
+    // B is symmetric and only its lower triangle is read (dense_act_ ascends; the T row is last)
+    B_.resize(q, q);
+    B_.triangularView<Eigen::Lower>() = c.Ya.transpose() * c.HaYa;
     if (free_time()) {
       const int iT = q - 1;
       // s' ∂g/∂v with ∂g/∂v = λᵀ J_c Y; ∂²x_c/∂T∂z_a = σ/8 J_a, ∂²x_c/∂T∂z_b = −σ/8 J_b

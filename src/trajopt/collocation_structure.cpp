@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
+#include <unordered_map>
 
 namespace freeflex {
 
@@ -247,7 +247,8 @@ void CollocationNlp::build_hessian_structure() {
   const int Tidx = time_index();
   const int npi = points_per_interval();
   const auto& fpat = dyn_.jacobian_pattern();
-  std::map<long long, int> slots;
+  std::unordered_map<long long, int> slots;  // (r, c) -> slot; hashed: an elastic NLP has ~1e5 entries
+  slots.reserve(static_cast<std::size_t>(P_) * dyn_.hessian_pattern().size() * 2 + 1024);
   hess_rows_.clear();
   hess_cols_.clear();
   auto slot = [&](int r, int c) {
@@ -330,6 +331,9 @@ void CollocationNlp::build_compressed_hessian_structure(const std::function<int(
     const int q = 2 * nz_ + nu_;  // without T
     std::vector<bool> hrow(nz_, false), act(q, false), trow(q, false);
     for (const auto& rc : dyn_.hessian_pattern()) hrow[rc.first] = hrow[rc.second] = true;
+    h_rows_.clear();
+    for (int i = 0; i < nz_; ++i)
+      if (hrow[i]) h_rows_.push_back(i);
     auto ynz = [&](int i, int c) {
       return i == c || std::find(fpat.begin(), fpat.end(), std::make_pair(i, c)) != fpat.end();
     };

@@ -24,7 +24,7 @@ ElasticDynamics::ElasticDynamics(const FlexibleBody& body, std::vector<int> actu
 
 ElasticDynamics::ElasticDynamics(const FlexibleBody& body, std::vector<int> actuators, const Stiffening& stiffening,
                                  int modes)
-    : actuators_(std::move(actuators)), modes_(modes) {
+    : modes_(modes), actuators_(std::move(actuators)) {
   const RigidDynamics check(body, actuators_);  // the same actuator checks and messages
   n_ = body.n();
   if (modes != all_modes && (modes < 1 || modes > n_))

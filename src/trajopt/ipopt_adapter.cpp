@@ -1,6 +1,7 @@
 // Ipopt 3.11 behind the collocation NLP: a TNLP that forwards to CollocationNlp and its
 // workspace, the options freeflex sets and the user's, and Ipopt's return status in
 // freeflex's terms. Ipopt's headers stay in this file.
+#include "trajopt/ma27_bridge.hpp"
 #include "trajopt/ipopt_adapter.hpp"
 
 #include <algorithm>
@@ -289,6 +290,19 @@ NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, c
   // KKT systems; MUMPS' automatic choice switches to an ordering that is ~30% slower
   // above ~10k unknowns (N ~ 800).
   opts.SetIntegerValue("mumps_pivot_order", 2);
+  if (o.linear_solver == LinearSolver::Ldlt) {
+    // freeflex's LDLᵀ behind Ipopt's MA27 interface (trajopt/ma27_bridge.cpp)
+    detail::register_sparse_ldlt();
+    opts.SetStringValue("linear_solver", "ma27");
+    opts.SetStringValue("linear_system_scaling", "none");
+    // the analysis's storage estimate is exact but for delayed pivots: Ipopt's defaults
+    // (5 times, and 10 times more when short) would reserve far more than is used
+    opts.SetNumericValue("ma27_la_init_factor", 1.5);
+    opts.SetNumericValue("ma27_liw_init_factor", 1.5);
+    opts.SetNumericValue("ma27_meminc_factor", 2.0);
+  } else {
+    opts.SetStringValue("linear_solver", "mumps");
+  }
   if (warm) opts.SetNumericValue("mu_init", 1e-6);  // start close to the central path of a near-optimal point
   for (const auto& kv : o.ipopt_options) set_user_option(*app, kv.first, kv.second);
 

@@ -66,6 +66,7 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
                                   const TrajoptOptions& options, std::chrono::steady_clock::time_point start) {
   TrajoptResult res;
   res.transcription = options.transcription;
+  res.linear_solver = options.linear_solver;
   std::vector<double> mesh(static_cast<std::size_t>(options.intervals), 1.0 / options.intervals);
   InitialGuess guess = options.guess;
   for (int round = 0;; ++round) {

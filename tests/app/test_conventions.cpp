@@ -69,6 +69,8 @@ TEST_CASE("every Options struct's defaults are valid", "[api]") {
   rejects(RunOptions{}, [](auto& o) { o.plot.timeout_s = 1e9; }, "timeout_s = 1e+09");
   rejects(IntegratorOptions{}, [](auto& o) { o.max_total_steps = -1; }, "max_total_steps = -1");
   rejects(SwitchTimeOptions{}, [](auto& o) { o.max_steps_per_simulation = -1; }, "max_steps_per_simulation");
+  rejects(SwitchTimeOptions{}, [](auto& o) { o.max_total_steps = -1; }, "max_total_steps = -1");
+  rejects(SwitchTimeOptions{}, [](auto& o) { o.simulations_per_unknown = 0; }, "simulations_per_unknown = 0");
   CHECK_NOTHROW(validate(DiscretizeOptions{}));
   CHECK_NOTHROW(validate(PlantOptions{}));
   CHECK_NOTHROW(validate(SampledLoopOptions{}));
@@ -86,6 +88,7 @@ TEST_CASE("every public enum round-trips through its names", "[api]") {
   check_names<IntegrationStatus>();
   check_names<SimulationOptions::Variables>();
   check_names<Transcription>();
+  check_names<LinearSolver>();
   check_names<TrajoptStatus>();
   check_names<CareResult::Status>();
   check_names<TvlqrResult::Status>();
@@ -110,6 +113,10 @@ TEST_CASE("enum names are the spellings design files take", "[api][io]") {
   for (const auto& [value, name] : EnumNames<Transcription>::names) {
     const Design d = parse_design(kBeam + actuators + "transcription = \"" + name + "\"\n", "t.toml");
     CHECK(d.maneuver->options.transcription == value);
+  }
+  for (const auto& [value, name] : EnumNames<LinearSolver>::names) {
+    const Design d = parse_design(kBeam + actuators + "linear_solver = \"" + name + "\"\n", "t.toml");
+    CHECK(d.maneuver->options.linear_solver == value);
   }
   const std::string load = "[[load]]\nname = \"F\"\ntype = \"torque\"\nposition_m = 0.5\n[load.profile]\n";
   for (const auto& [value, name] : EnumNames<TimeProfile::Kind>::names) {

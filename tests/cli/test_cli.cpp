@@ -147,6 +147,25 @@ TEST_CASE("run on the minimum-energy slew writes the trajectory and the vibratio
   CHECK(exists(out + "/perturbation.csv"));
 }
 
+TEST_CASE("a vibration-aware suppression draws the commands of both nominals", "[cli][control]") {
+  // its cases are vibration_aware_* and rigid_optimum_*: the commands figure drew none
+  // of them and gnuplot failed on an empty plot
+  const std::string out = temp_path("rotation_at_rest");
+  const CliResult r =  // not --quiet: a figure that gnuplot fails on is a warning
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/suppress_rotation_at_rest.toml --out " + out);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  const std::string gp = read(out + "/comparison_commands.gp");
+  CHECK(gp.find("plot ,") == std::string::npos);
+  for (const char* family : {"vibration_aware_", "rigid_optimum_"})
+    for (const char* c : {"open_loop", "tvlqr"}) {
+      const std::string file = std::string("commands_") + family + c + "_nonlinear.csv";
+      CHECK_THAT(gp, Contains("'" + file + "'"));
+      CHECK(exists(out + "/" + file));
+    }
+  CHECK(r.output.find("not drawn") == std::string::npos);
+}
+
 TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {
   const std::string design = write_temp("unreachable",
                                         "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n"

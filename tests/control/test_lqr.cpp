@@ -15,9 +15,14 @@
 #include "freeflex/control/lyapunov.hpp"
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/sim/integrator.hpp"
+#include "support/bodies.hpp"
 
 using namespace freeflex;
 using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
+using freeflex_test::actuated_beam;
+using freeflex_test::no_commands;
+using freeflex_test::RestTrajectory;
 
 namespace {
 
@@ -26,32 +31,6 @@ Eigen::MatrixXd care_residual(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B
   return A.transpose() * P + P * A - P * B * R.inverse() * B.transpose() * P + Q;
 }
 
-/// The paper beam (1 m, 1 kg, EI 1, o at the centre) with a torque at o and body-y
-/// thrusters at both tips: the actuators of the control tests.
-FlexibleBody actuated_beam(int noa) {
-  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
-  return FlexibleBody(beam, noa,
-                      {{"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                       {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
-}
-
-/// The beam held at rest at a fixed attitude: a time-invariant first-order model.
-class RestTrajectory : public RigidTrajectory {
- public:
-  explicit RestTrajectory(double theta) { s_.pos(2) = theta; }
-  RigidState at(const Instant&) const override { return s_; }
-  double t_begin() const override { return 0.0; }
-  double t_end() const override { return 0.0; }
-  std::vector<double> breakpoints() const override { return {}; }
-
- private:
-  RigidState s_;
-};
-
-CommandFunction no_commands() {
-  return [](const Instant&, Eigen::Ref<Eigen::VectorXd> c) { c.setZero(); };
-}
 
 }  // namespace
 
@@ -298,6 +277,39 @@ TEST_CASE("TV-LQR: scalar Riccati closed form", "[control]") {
   CHECK(worst < 1e-8);  // rtol 1e-11 with ~100 steps: global error ~1e-9
   CHECK(res.s0.norm() == 0.0);  // no forcing: no feedforward
   CHECK(res.modal_setups == res.preconditioner_setups);  // the default (block-diagonal) Newton solves ran
+}
+
+TEST_CASE("TV-LQR: a work budget stops the backward sweep with the time reached", "[control][issue20]") {
+  const double a = 0.7, b = 1.3, T = 1.5;
+  LtvSystem sys;
+  sys.state_size = 1;
+  sys.input_size = 1;
+  sys.state_space = [&](const Instant&) {
+    return StateSpace{Eigen::MatrixXd::Constant(1, 1, a), Eigen::MatrixXd::Constant(1, 1, b), Eigen::VectorXd::Zero(1)};
+  };
+  TvlqrOptions o;
+  o.Qf = Eigen::MatrixXd::Constant(1, 1, 3.0);
+  o.rtol = 1e-11;
+  o.atol = 1e-13;
+  const Eigen::MatrixXd Q = Eigen::MatrixXd::Constant(1, 1, 2.0), R = Eigen::MatrixXd::Constant(1, 1, 0.5);
+  const TvlqrResult free = solve_tvlqr(sys, 0.0, T, Q, R, o);
+  REQUIRE(free.ok());
+  REQUIRE(free.steps > 20);
+  CHECK(riccati_step_work(1) == 1);
+  CHECK(riccati_step_work(18) == 18 * 18 * 18);  // n³ for n states
+  o.budget = std::make_shared<WorkBudget>(free.steps, "the test");  // exactly enough: the same law
+  const TvlqrResult same = solve_tvlqr(sys, 0.0, T, Q, R, o);
+  REQUIRE(same.ok());
+  CHECK(same.K.back()(0, 0) == free.K.back()(0, 0));
+  CHECK(same.K.front()(0, 0) == free.K.front()(0, 0));
+  CHECK(o.budget->spent() == free.steps);
+  o.budget = std::make_shared<WorkBudget>(20, "the test");  // 20 steps of a 1-state sweep
+  const TvlqrResult stopped = solve_tvlqr(sys, 0.0, T, Q, R, o);
+  CHECK(stopped.status == TvlqrResult::Status::IntegrationFailed);
+  CHECK(stopped.steps == 20);
+  CHECK_THAT(stopped.message, StartsWith("stopped at t = ") && Contains(" s: the test's work budget of 20 units") &&
+                                  Contains("is spent"));
+  CHECK(o.budget->exhausted());
 }
 
 TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value, perturbations cost more",

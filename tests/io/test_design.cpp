@@ -132,6 +132,17 @@ TEST_CASE("bad loads and tolerances name key and line", "[io]") {
              Contains("line 16: simulation.atol = 99999999999, must be in (0, 1)"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\nfull_model_variables = \"eigen\"\n"),
              Contains("line 16: simulation.full_model_variables"));
+  // the integration methods, freeflex's own DOP853 among them, are listed
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\nmethod = \"rk45\"\n"),
+             Contains("line 16: simulation.method") && Contains("dop853"));
+  // the explicit pairs' steps take 12 to 16 right-hand sides: ten times an Adams step's
+  // work units against the study's budget
+  const Design rk = parse_design(kPaperBeam + kLoad + "[simulation]\nduration_s = 1.0\nmethod = \"verner98\"\n", "t.toml");
+  REQUIRE(rk.simulation);
+  CHECK(rk.simulation->options.integrator.method == IntegratorOptions::Method::Verner98);
+  for (long dim : {18L, 46L})
+    for (auto m : {IntegratorOptions::Method::Dop853, IntegratorOptions::Method::Verner98})
+      CHECK(step_work(dim, m) == 10 * step_work(dim, IntegratorOptions::Method::Adams));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 0\n"),
              Contains("line 15: simulation.duration_s = 0, must be > 0"));
   std::string wrong_count = kLoad;

@@ -80,7 +80,6 @@ TEST_CASE("seeded mutants of the shipped designs load or are refused, never anyt
       if (d.simulation) {
         const auto& o = d.simulation->options;
         CHECK(o.duration_s / o.output_step_s <= design_limits::kMaxOutputRows);
-        CHECK(o.integrator.max_total_steps > 0);
       }
       if (d.maneuver) CHECK(d.maneuver->options.intervals <= design_limits::kMaxIntervals);
     } catch (const DesignError& e) {

@@ -1,4 +1,4 @@
-// Result files: CSV text and the all-or-nothing file writer.
+// Result files: CSV text, the all-or-nothing file writer, figure titles.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -9,8 +9,12 @@
 #include <stdexcept>
 
 #include "freeflex/io/output.hpp"
+#include "freeflex/io/plot.hpp"
+#include "support/cli.hpp"
+#include "support/files.hpp"
 
 using namespace freeflex;
+using Catch::Matchers::Contains;
 
 TEST_CASE("CSV rows use the shortest digits that read back to the same double, and NaN is an empty cell", "[io]") {
   Eigen::MatrixXd data(2, 3);
@@ -56,5 +60,29 @@ TEST_CASE("a file is replaced whole or not at all", "[io]") {
   CHECK(entries == 1);
   // A directory that does not exist: IoError naming the path.
   CHECK_THROWS_AS(write_file_atomic(dir + "/missing/r.csv", "x"), IoError);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a long figure title is broken into lines the figure's width holds", "[io]") {
+  const std::string dir = freeflex_test::temp_path("plot_title");
+  std::filesystem::create_directories(dir);
+  PlotSpec spec;
+  spec.name = "t";
+  spec.width_px = 900;  // about 112 characters a line at Sans 10
+  spec.title = "Feedback actuators' commands, open loop and under TV-LQR: Rest-to-rest rotation: vibration-aware "
+               "optimum, rigid optimum, TV-LQR, bang-bang";  // 134 characters: cut at both sides before
+  spec.panels.push_back({"panel", "t [s]", "y", {}});
+  spec.panels.push_back({"other", "t [s]", "y", {}});
+  PlotOptions no_gnuplot;
+  no_gnuplot.gnuplot = "";
+  render_plot(spec, dir, no_gnuplot);
+  const std::string gp = freeflex_test::read_text(dir + "/t.gp");
+  CHECK_THAT(gp, Contains("title 'Feedback actuators'' commands, open loop and under TV-LQR: Rest-to-rest rotation: "
+                          "vibration-aware optimum, rigid'.\"\\n\".'optimum, TV-LQR, bang-bang'"));
+  spec.title = std::string(600, 'x');  // no blank to break at: cut at the width, three lines at most
+  render_plot(spec, dir, no_gnuplot);
+  const std::string cut = freeflex_test::read_text(dir + "/t.gp");
+  CHECK_THAT(cut, Contains("'" + std::string(112, 'x') + "'.\"\\n\".'" + std::string(112, 'x') + "'.\"\\n\".'" +
+                           std::string(112, 'x') + "...'"));
   std::filesystem::remove_all(dir);
 }

@@ -22,7 +22,10 @@ using freeflex::Instant;
 using freeflex::integrate;
 using freeflex::IntegratorOptions;
 using freeflex::OdeSystem;
+using freeflex::step_work;
+using freeflex::WorkBudget;
 using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
 using Method = IntegratorOptions::Method;
 
 namespace {
@@ -443,4 +446,49 @@ TEST_CASE("the total step budget stops the whole integration, with the time reac
   REQUIRE(same.ok());
   CHECK(same.steps == free.steps);
   CHECK(same.x == free.x);
+}
+
+TEST_CASE("a work budget shared by integrations stops the one that spends it and every later one",
+          "[sim][issue20]") {
+  long calls = 0;
+  const OdeSystem sys = oscillator(2.0 * kPi, &calls);
+  const std::vector<double> times = linspace(0.0, 10.0, 101);
+  IntegratorOptions opt;
+  const auto free = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  REQUIRE(free.ok());
+  REQUIRE(free.steps > 400);
+  const long long per_step = step_work(2, IntegratorOptions::Method::Adams);
+  CHECK(per_step == 400);  // a model of one coordinate costs the floor of max(N², 400)
+  CHECK(step_work(2 * 103, IntegratorOptions::Method::Adams) == 103 * 103);
+  CHECK(step_work(2 * 103, IntegratorOptions::Method::Bdf) == 3 * 103 * 103);
+  // room for the first run and 400 more steps: the second stops there
+  opt.budget = std::make_shared<WorkBudget>((free.steps + 400) * per_step, "the test");
+  const auto first = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  REQUIRE(first.ok());
+  CHECK(first.x == free.x);  // a budget that suffices changes nothing
+  CHECK(opt.budget->spent() == free.steps * per_step);  // every step charged, at its weight
+  CHECK_FALSE(opt.budget->exhausted());
+  const auto second = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  CHECK_FALSE(second.ok());
+  CHECK(second.steps == 400);          // exactly what was left
+  CHECK(second.failure_time > 0.0);    // it stopped part way through the span,
+  CHECK(second.failure_time < 10.0);   // at the time it had reached
+  CHECK_THAT(second.message, StartsWith("stopped at t = ") && Contains("the test's work budget of ") &&
+                                 Contains(" is spent"));
+  CHECK(opt.budget->exhausted());
+  CHECK(opt.budget->left() < per_step);  // not one more step's worth
+  // a later integration charged to it stops before its first step, at its start
+  const auto third = integrate(sys, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  CHECK_FALSE(third.ok());
+  CHECK(third.steps == 0);
+  CHECK(third.failure_time == 0.0);
+  CHECK_THAT(third.message, StartsWith("stopped at t = 0: the test's work budget"));
+  // a system may say what its steps cost: twice the weight, half the steps
+  opt.budget = std::make_shared<WorkBudget>(400 * 800, "the test");
+  OdeSystem heavy = sys;
+  heavy.step_work = 800;
+  const auto fewer = integrate(heavy, Eigen::Vector2d(1.0, 0.0), times, {}, opt);
+  CHECK_FALSE(fewer.ok());
+  CHECK(fewer.steps == 400);  // 400 x 800 units
+  CHECK_THROWS_WITH(WorkBudget(0, "none"), Contains("units = 0, expected > 0"));
 }

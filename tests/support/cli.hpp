@@ -1,8 +1,12 @@
 #pragma once
 // Runs the freeflex program built beside the tests and captures its output and exit code.
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
+#include <system_error>
+#include <vector>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -28,14 +32,35 @@ inline CliResult run_cli(const std::string& args, const std::string& redirect = 
   return r;
 }
 
+/// The paths handed out below, removed when the test program ends (set
+/// FREEFLEX_KEEP_TEST_FILES to keep them for a look after a failure).
+inline std::vector<std::string>& temp_paths() {
+  static std::vector<std::string> paths;
+  static const bool cleanup = [] {
+    return std::atexit([] {
+             if (std::getenv("FREEFLEX_KEEP_TEST_FILES")) return;
+             for (const std::string& p : temp_paths()) {
+               std::error_code ignored;  // a test may have removed it already
+               std::filesystem::remove_all(p, ignored);
+             }
+           }) == 0;
+  }();
+  (void)cleanup;
+  return paths;
+}
+
 /// A fresh temporary directory path (not created).
 inline std::string temp_path(const std::string& stem) {
   static int counter = 0;
-  return "/tmp/freeflex_test_" + stem + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+  const std::string path =
+      "/tmp/freeflex_test_" + stem + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+  temp_paths().push_back(path);
+  return path;
 }
 
 inline std::string write_temp(const std::string& stem, const std::string& text) {
   const std::string path = temp_path(stem) + ".toml";
+  temp_paths().push_back(path);
   std::ofstream(path) << text;
   return path;
 }

@@ -355,3 +355,39 @@ TEST_CASE("the collocation trajectory is a consistent RigidTrajectory", "[trajop
     CHECK(traj.control_at(3.1).isZero());
   }
 }
+
+TEST_CASE("Ipopt reaches the same optimum with freeflex's LDLT as with MUMPS", "[trajopt][ldlt]") {
+  // the same NLP factored two ways: each KKT solve agrees to round-off, so Ipopt takes the
+  // same iterations to the same point (measured: |dJ|/J <= 2.0e-16 and |du| <= 1.2e-15 N
+  // over the four cases, the same iteration counts); the bounds leave room for round-off
+  // growing over ~20 iterations, far below Ipopt's tolerance (tol 1e-8)
+  const FlexibleBody body = thruster_body();
+  ManeuverProblem energy = slew();
+  ManeuverProblem fastest = slew();  // saturated arcs and a free duration
+  fastest.free_time = true;
+  fastest.t_min_s = 0.5;
+  fastest.t_max_s = 10.0;
+  fastest.w_energy = 0.0;
+  fastest.w_time = 1.0;
+  fastest.w_smooth = 1e-4;
+  for (const ManeuverProblem& p : {energy, fastest})
+    for (Transcription tr : {Transcription::Trapezoidal, Transcription::HermiteSimpsonCompressed}) {
+      TrajoptOptions o;
+      o.transcription = tr;
+      o.intervals = 40;
+      o.linear_solver = LinearSolver::Ldlt;
+      const TrajoptResult a = solve_maneuver(body, p, o);
+      o.linear_solver = LinearSolver::Mumps;
+      const TrajoptResult b = solve_maneuver(body, p, o);
+      REQUIRE(a.ok());
+      REQUIRE(b.ok());
+      INFO(to_string(tr) << (p.free_time ? ", minimum time" : ", minimum energy") << ": J " << a.objective << " vs "
+                         << b.objective << ", iterations " << a.iterations << " vs " << b.iterations << ", |dJ|/J "
+                         << std::abs(a.objective - b.objective) / std::abs(b.objective) << ", max |du| "
+                         << (a.u - b.u).cwiseAbs().maxCoeff());
+      CHECK(a.linear_solver == LinearSolver::Ldlt);
+      CHECK(a.iterations == b.iterations);
+      CHECK(std::abs(a.objective - b.objective) < 1e-12 * std::abs(b.objective));
+      CHECK((a.u - b.u).cwiseAbs().maxCoeff() < 1e-10);
+    }
+}

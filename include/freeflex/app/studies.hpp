@@ -153,6 +153,8 @@ struct SimulationStudyResult {
     double max_abs_dR_m = 0.0, max_abs_dtheta_rad = 0.0, max_abs_dq = 0.0, max_rigid_difference = 0.0;
   };
   std::optional<Differences> difference_nonlinear_minus_perturbation;  ///< when both completed
+  /// Work its integrations were charged (WorkBudget units) of its budget, Design::study_work.
+  long long work_units = 0, work_budget_units = 0;
 };
 SimulationStudyResult run_simulation_study(const Design& design, const ManeuverStudyResult* maneuver = nullptr,
                                            const StudyLog& log = {});
@@ -187,6 +189,8 @@ struct SuppressionStudyResult {
     ResponseMetrics metrics;
   };
   std::vector<Case> cases;
+  /// Work its integrations were charged (WorkBudget units) of its budget, Design::study_work.
+  long long work_units = 0, work_budget_units = 0;
 };
 SuppressionStudyResult run_suppression_study(const Design& design, const ManeuverStudyResult* maneuver = nullptr,
                                              const StudyLog& log = {});

@@ -43,6 +43,8 @@ struct LqgStudyResult {
   double continuous_energy_J = 0.0;   ///< the [controller]'s continuous TV-LQR on the full model
   /// The filter's 1σ of each elastic coordinate q_i at the end (square roots of P⁺'s diagonal).
   Eigen::VectorXd final_elastic_std;
+  /// Work its integrations were charged (WorkBudget units) of its budget, Design::study_work.
+  long long work_units = 0, work_budget_units = 0;
 };
 LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult& suppression,
                              const ManeuverStudyResult* maneuver = nullptr, const StudyLog& log = {});
@@ -88,6 +90,9 @@ struct SweepStudyResult {
   double wall_time_s = 0.0;         ///< flying this process's samples
   double time_per_sample_s = 0.0;   ///< wall time / samples flown here (threads and ranks included)
   double cpu_time_per_sample_s = 0.0;  ///< mean time of one sample on one core
+  /// Work (WorkBudget units) of the filter and the digital law, and of the samples flown
+  /// here; each sample's share of Design::sweep_work (at most Design::study_work).
+  long long setup_work_units = 0, sample_work_units = 0, work_share_per_sample = 0;
 };
 SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyResult& suppression,
                                  const ManeuverStudyResult* maneuver = nullptr, const SweepExecution& execution = {},

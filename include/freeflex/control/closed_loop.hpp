@@ -38,8 +38,27 @@ inline IntegratorOptions closed_loop_integrator() {
   return o;
 }
 
+/// How the closed loop on the first-order model is integrated (docs/theory.md, "The
+/// closed loop on the first-order model"). The full model's is always CVODES's.
+enum class ClosedLoopMethod {
+  /// CVODES with ClosedLoopOptions::integrator (BDF, error control to rtol and atol).
+  Cvodes,
+  /// 5-stage Gauss-Legendre collocation (order 10) on the linear system x1' = (A − B K) x1
+  /// + B c + g, with fixed steps: `gauss_steps` per interval between consecutive gain grid
+  /// times, output times and breakpoints (so no step straddles a kink of K(t) or a jump),
+  /// one linear solve per step, a step across a saturation switch halved until it is
+  /// 2^-40 of its length. No error control: the accuracy is set by gauss_steps (on
+  /// designs/suppress_slew.toml, 8 steps per 5 ms interval: 6.8e-14 from a long-double
+  /// reference, BDF at rtol 1e-14 2.4e-12). A-stable, not L-stable: fast real closed-loop
+  /// poles need |λ| h of a few (the moment example's −8.6e3 1/s at a 10 ms gain grid:
+  /// 16 steps 7.4e-10, 8 steps 2.4e-7 in the rates after saturation switches).
+  Gauss,
+};
+
 struct ClosedLoopOptions {
-  IntegratorOptions integrator = closed_loop_integrator();  ///< CVODES settings
+  IntegratorOptions integrator = closed_loop_integrator();  ///< CVODES settings (max_total_steps and progress serve Gauss too)
+  ClosedLoopMethod first_order_method = ClosedLoopMethod::Cvodes;  ///< of simulate_closed_loop_first_order
+  int gauss_steps = 8;               ///< Gauss steps per interval, in [1, 1000]
   double t_begin = 0.0;              ///< [s]; with t_end <= t_begin: the law's [t0, tf]
   double t_end = 0.0;
   double output_step_s = 0.005;      ///< [s], > 0
@@ -66,8 +85,8 @@ struct ClosedLoopResult {
   Eigen::VectorXd saturated_fraction_per_actuator;
   double peak_command = 0.0;  ///< max |applied command| over actuators and times
   double peak_demand = 0.0;   ///< max |demanded command|
-  long rhs_evaluations = 0;
-  long steps = 0;
+  long rhs_evaluations = 0;  ///< CVODES: right-hand sides; Gauss: evaluations of A, B, g, K
+  long steps = 0;            ///< CVODES or Gauss steps
   double wall_time_s = 0.0;
 };
 
@@ -85,5 +104,12 @@ ClosedLoopResult simulate_closed_loop_first_order(const FirstOrderModel& model, 
 ClosedLoopResult simulate_closed_loop_full(const FirstOrderModel& model, const Excitation& loads,
                                            const ActuatorCommandFunction& u0, const TvlqrResult& law,
                                            const ClosedLoopOptions& options);
+
+template <>
+struct EnumNames<ClosedLoopMethod> {
+  static constexpr const char* what = "closed-loop method";
+  static constexpr std::array<std::pair<ClosedLoopMethod, const char*>, 2> names{
+      {{ClosedLoopMethod::Cvodes, "cvodes"}, {ClosedLoopMethod::Gauss, "gauss"}}};
+};
 
 }  // namespace freeflex

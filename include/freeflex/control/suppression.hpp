@@ -52,6 +52,10 @@ struct SuppressionOptions {
   SimulationOptions simulation;
   TvlqrOptions tvlqr;                                       ///< the loads' times are added as breakpoints
   IntegratorOptions closed_loop = closed_loop_integrator();  ///< CVODES settings of the closed-loop runs
+  /// The first-order closed loop's method and Gauss steps (ClosedLoopOptions); the full
+  /// model's closed loop is CVODES's with closed_loop.
+  ClosedLoopMethod closed_loop_first_order_method = ClosedLoopMethod::Cvodes;
+  int closed_loop_gauss_steps = ClosedLoopOptions{}.gauss_steps;
   /// Optional, for progress reports (must not throw): a phase begins (done = false; its
   /// span in simulated or swept seconds is `total_s`) or ends (done = true, `so_far`
   /// holds its results).

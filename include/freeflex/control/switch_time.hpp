@@ -13,19 +13,33 @@
 // durations Δ_0..Δ_{2k+1} >= 0; the constraints are the rigid rest-to-rest conditions
 // θ0(T) = Δθ, θ0'(T) = 0 and, for each targeted mode j, [ω_j η_j(T), η_j'(T)] = 0 (η_j
 // the modal coordinate of the first-order state at T, mass-normalized modes of the rest
-// model, eq. 4.1): 2k + 2 equations for 2k + 2 unknowns, minimizing T = Σ Δ.
+// model, eq. 4.1): 2k + 2 equations for 2k + 2 unknowns, so the designs are isolated
+// roots, and the shortest root is the answer. On a flexible beam the shortest ones are
+// near-rigid: the rigid switch at T*/2 with a cluster of short notches around it, T a
+// fraction of a percent above T* (docs/theory.md section 12).
 //
-// Two stages, both with NLopt's SLSQP:
+// Two stages:
 //  1. closed form: modes frozen about rest and θ0'² neglected, so each mode is a forced
 //     oscillator with residual amplitude ∝ |Σ_i c_i e^{iω t_i}| (c_i the torque jumps);
-//     analytic gradients, multi-start, the shortest feasible design kept;
+//     NLopt's SLSQP with analytic gradients, continued in the number of modes from the
+//     rigid answer (the roots for k' − 1 modes, with one switch more inserted near each
+//     switch of their first half and mirrored about T/2, start the runs for k'), plus
+//     random antisymmetric starts; the distinct roots are sorted by T;
 //  2. the first-order model itself (θ0'² softening and all couplings), simulated with
-//     CVODES for every evaluation, gradients by forward differences, started from the
-//     closed-form roots in order of duration until one carries over (the shortest
-//     closed-form root need not survive the softening): Newton's method on the square
-//     system by default, or SLSQP.
+//     CVODES for every evaluation, gradients by forward differences: the shortest
+//     closed-form roots are carried into it by a continuation in the size of the
+//     rotation (Δθ and τmax scaled by λ from 0, where the closed form is exact, to 1),
+//     each step solved by Newton's method on the square system by default, or by SLSQP;
+//     the shortest first-order root is kept.
 // The residual energy reported is that of the first-order simulation at T.
+//
+// Work, bounded before any work by k and the options (switch_time_work): closed-form
+// evaluations at most (starts + 30 k²)(max_evaluations + 1), each O(k²) flops; first-order
+// simulations at most refine_roots · simulations_per_unknown · (2k + 2) + 2 (1 for k = 0), each at most
+// max_steps_per_simulation steps; and all their steps together at most max_total_steps.
+// Spending a budget ends the design as not converged, with the reason.
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -68,19 +82,42 @@ struct SwitchTimeOptions {
   double atol = 1e-13;
   /// Steps of each first-order simulation (IntegratorOptions::max_total_steps); 0: no limit.
   long max_steps_per_simulation = 0;
+  /// Steps of all first-order simulations of one design together; 0: no limit.
+  long max_total_steps = 0;
+  /// Optional: the work budget every first-order simulation is charged to
+  /// (IntegratorOptions::budget; a study's, shared with its other integrations). Once it
+  /// is spent each simulation fails at once, and so does the design.
+  std::shared_ptr<WorkBudget> budget;
   /// On the scaled constraints (each modal one is sqrt(E_j / E_rigid)): 1e-7 leaves
   /// E_j / E_rigid ~ 1e-14.
   double constraint_tolerance = 1e-7;
-  int starts = 24;                 ///< multi-start count of the closed-form stage
-  int max_evaluations = 200;       ///< SLSQP evaluations per run
-  /// Stage 2: Newton's method on the square system (forward-difference Jacobian, ~70
-  /// simulations for k = 1) or NLopt SLSQP with the same gradients (minimizing T under
-  /// the equality constraints; about three times the simulations).
+  int starts = 24;                 ///< random antisymmetric starts of the closed-form stage, in [1, 10000]
+  int max_evaluations = 200;       ///< SLSQP evaluations per run, in [1, 100000]
+  /// Closed-form roots carried into the first-order model at most, shortest first, in
+  /// [1, 100]; roots more than 1% longer than the shortest first-order root found are not.
+  int refine_roots = 4;
+  /// First-order simulations per carried root and per unknown (2k + 2 unknowns), in
+  /// [1, 10000]: a root that needs more is given up (Newton took 8 to 22 on the paper's beam).
+  int simulations_per_unknown = 25;
+  /// Stage 2's solver at each continuation step: Newton's method on the square system
+  /// (forward-difference Jacobian; 32 simulations for k = 1 on the paper's beam) or NLopt
+  /// SLSQP with the same gradients (minimizing T under the equality constraints; 731
+  /// simulations there, so it needs max_evaluations >= 150 and simulations_per_unknown
+  /// >= 185).
   enum class Refine { Newton, Slsqp } refine = Refine::Newton;
   /// Optional: called with the count of first-order simulations so far after each one
   /// starts (for progress reports); must not throw.
   std::function<void(int)> progress;
 };
+
+/// The most work design_switch_times(..., modes, options) may do (see the file comment).
+struct SwitchTimeWork {
+  long closed_form_evaluations = 0;  ///< (starts + 30 k²)(max_evaluations + 1)
+  long simulations = 0;              ///< refine_roots · simulations_per_unknown · (2k + 2) + 2 (1 for k = 0)
+  long steps = 0;                    ///< of all simulations together; 0: unbounded (no step limits set)
+};
+/// Throws std::invalid_argument for modes outside [0, 4] or options out of range.
+SwitchTimeWork switch_time_work(int modes, const SwitchTimeOptions& options);
 
 /// Throws std::invalid_argument naming the first setting out of range (the actuator is
 /// checked against the body by design_switch_times); the defaults are valid.
@@ -98,6 +135,7 @@ struct SwitchTimeResult {
   std::vector<double> closed_form_switch_times;  ///< stage 1
   double closed_form_duration_s = 0.0;
   double closed_form_residual_ratio = 0.0;  ///< stage-1 design simulated in the first-order model
+  int closed_form_roots = 0;               ///< distinct closed-form roots found
 
   Eigen::VectorXd mode_frequencies_rad_s;  ///< the targeted modes (rest model)
   Eigen::VectorXd residual_energy_J;       ///< of each targeted mode at T (first-order model)
@@ -106,7 +144,9 @@ struct SwitchTimeResult {
   double residual_ratio = 0.0;             ///< Σ residual_energy_J / rigid_kinetic_peak_J
   double final_angle_rad = 0.0;            ///< θ0(T)
   double final_rate_rad_s = 0.0;           ///< θ0'(T)
-  int simulations = 0;                     ///< first-order simulations in stage 2
+  long closed_form_evaluations = 0;         ///< work done (within switch_time_work)
+  int simulations = 0;                      ///< first-order simulations, the final checks included
+  long steps = 0;                           ///< their CVODES steps
   double wall_time_s = 0.0;
 
   TimeProfile torque_profile() const;  ///< needs the limit: ±τmax Steps (stored below)

@@ -35,29 +35,64 @@ inline constexpr double kMinDuration_s = 1e-6;            ///< any duration or h
 inline constexpr double kMaxOutputRows = 200000;          ///< rows of one output series, TV-LQR grid points
 inline constexpr double kMaxTrajectorySamples = 1000000;  ///< samples of the zero-order motion
 inline constexpr int kMaxForceElements = 64;              ///< [[load]] and [[actuator]] tables together
-inline constexpr std::size_t kMaxProfileTimes = 10000;    ///< times_s entries of all load profiles
+/// [[beam.segment]] tables, and [[beam.point_mass]] tables (each count): building a body
+/// costs about p² x (1 + noa / 10) µs for p of them together (0.56 s at 200 and noa 100),
+/// and every study builds one (a [sweep], one per sample).
+inline constexpr int kMaxBeamPieces = 100;
+inline constexpr int kMaxSensors = 64;                    ///< [[sensor]] tables (rows of C)
+inline constexpr std::size_t kMaxProfileTimes = 10000;    ///< times_s entries of all load profiles and motion tables
 inline constexpr int kMaxNoaSweep = 100;                  ///< entries of free_vibration.noa_sweep
 inline constexpr int kMaxModeShapes = 20;                 ///< [[free_vibration.mode_shape]] tables
 inline constexpr int kMaxModeShapePoints = 100000;        ///< points of one mode shape
 inline constexpr double kMaxModeShapeRows = 200000;       ///< points of all mode shapes together
+/// [free_vibration] on the finite-element basis: element-modes (elements x (modes + 2))
+/// of every element model it solves, its NOA sweep with the error estimates' second
+/// models, its mode shapes and spin rates; measured up to 4.2e-5 s of CPU each (2000
+/// quintic elements, 100 modes: 8.4 s), so about 2 min at most.
+inline constexpr double kMaxBasisWork = 3e6;
 inline constexpr int kMaxIntervals = 5000;                ///< collocation intervals (trajopt's max_intervals)
 inline constexpr int kMaxMeshRefinements = 20;            ///< mesh-refinement rounds
 inline constexpr long kMaxIterations = 1000000;           ///< Ipopt max_iter (either key)
 /// Ipopt iterations x NLP unknowns, summed over the mesh-refinement rounds (each round's
 /// mesh at most doubles, up to kMaxIntervals): the optimizer's work, 3.2 to 4 µs of CPU
 /// per unit (measured: 20 and 24 iterations on 5000 intervals, 70 007 unknowns: 4.5 s and
-/// 6.7 s), so about 3 min at the bound.
+/// 6.7 s), so about 3 min at the bound. An elastic maneuver's derivatives count as
+/// max(0, s³/100 - 4 s) more unknowns at each point of s unknowns (fitted: like the rigid
+/// problem's at s = 16, 8 to 13 ms a point and iteration at s = 71, 0.1 to 0.24 s at
+/// s = 211), and the rigid counterpart solved after it adds its own.
 inline constexpr double kMaxIpoptWork = 4.5e7;
+/// An elastic maneuver's NLP: collocation points x (unknowns per point)², bounding the
+/// memory of Ipopt's matrices (about 20 doubles per point and unknown², measured 0.36 GB
+/// at 401 points of 71 unknowns), so about 400 MB.
+inline constexpr double kMaxElasticNlpSize = 2.5e6;
 /// NLP unknowns Ipopt's derivative checker may test: its work grows like n³ for the
 /// first-order test and faster (about n^3.8) for the second-order ones. At these sizes
 /// each takes about 15 s of CPU (docs: README, the "(limits)" row).
 inline constexpr double kMaxDerivativeTestUnknowns = 2000;
 inline constexpr double kMaxSecondOrderTestUnknowns = 400;
-/// Doubles of the TV-LQR's stored gains: grid points x actuators x 2 (3 + noa) (400 MB).
+/// Doubles of the matrices a study keeps along time (400 MB): the TV-LQR's gains (grid
+/// points x actuators x 2 (3 + noa)), the [lqg] filter and digital law, [export]'s model.
 inline constexpr double kMaxGainStorage = 5e7;
-/// Work of one integration (simulation, comparison run, switch-time simulation): CVODES
-/// steps x max(n², 400), n = 3 + model.noa; integrator_step_budget() turns it into steps.
-inline constexpr double kMaxIntegratorWork = 2e9;
+/// Work of the Gauss closed loop ([controller] closed_loop_first_order_method = "gauss"):
+/// Gauss steps x (5 n)³, n = 2 (3 + model.noa), one dense LU of the 5-stage system per
+/// step, the steps counted as closed_loop_gauss_steps per interval of the gain grid and
+/// of the output times: about 3 min (designs/suppress_slew.toml with 8 steps: 8 000
+/// steps at NOA 6, 5.9e9, 1.7 s).
+inline constexpr double kMaxGaussWork = 6e11;
+/// [export] "poles": model grid points x n³ for n = 2 (3 + noa) states (two eigenvalue
+/// problems of n x n at each point, measured 3 to 6 ns per n³ each: about 30 s at most).
+inline constexpr double kMaxPolesWork = 2.5e9;
+/// Work of one study ([simulation], [controller] with its bang-bang rotations, [lqg]):
+/// the CVODES steps of all its integrations, each weighted by what it integrates
+/// (step_work: max(N², 400) for a model of N = 3 + noa coordinates, three times that with
+/// BDF; riccati_step_work: n³ for the TV-LQR's n = 2N states). Measured 1.4 to 6 ns of
+/// CPU per unit, so at most about 2 min; spending it ends the study as a numerical failure.
+inline constexpr long long kMaxStudyWork = 20000000000LL;
+/// Work of a [sweep]'s samples together (the same units; about 100 min of CPU at the
+/// worst, shared out over threads and ranks): each sample may spend an equal share, at
+/// most kMaxStudyWork, and the design is refused when the samples' least work (one step
+/// per sample interval) exceeds it.
+inline constexpr long long kMaxSweepWork = 1000000000000LL;
 inline constexpr double kMinLength_m = 1e-3, kMaxLength_m = 1e4;
 inline constexpr double kMinMass_kg = 1e-6, kMaxMass_kg = 1e9;
 inline constexpr double kMinMassPerLength_kg_m = 1e-6, kMaxMassPerLength_kg_m = 1e6;
@@ -168,6 +203,11 @@ struct ControllerStudy {
   /// CVODES tolerances of the closed-loop runs (defaults: closed_loop_integrator()).
   double closed_loop_rtol = closed_loop_integrator().rtol;
   double closed_loop_atol = closed_loop_integrator().atol;
+  /// How the first-order closed loop is integrated (ClosedLoopOptions).
+  ClosedLoopMethod closed_loop_first_order_method = ClosedLoopMethod::Cvodes;
+  int closed_loop_gauss_steps = ClosedLoopOptions{}.gauss_steps;
+  /// How the TV-LQR's Riccati equation is integrated (TvlqrOptions::method).
+  TvlqrOptions::Method tvlqr_method = TvlqrOptions::Method::Auto;
 };
 
 /// [export]: what the controller study leaves for other tools (README, outputs): files
@@ -252,6 +292,10 @@ struct Design {
   std::optional<LqgStudy> lqg;
   std::optional<SweepStudy> sweep;
   std::optional<ExportRequest> exports;  ///< [export] (needs [controller])
+  /// The work budget of each study and of a sweep's samples together (WorkBudget; README,
+  /// the "(limits)" row). Not design keys: a program may lower them (the tests do).
+  long long study_work = design_limits::kMaxStudyWork;
+  long long sweep_work = design_limits::kMaxSweepWork;
 
   /// Force elements: loads first, then actuators (the order of the commands vector).
   std::vector<ForceElement> force_elements() const;
@@ -262,8 +306,11 @@ struct Design {
   FlexibleBody body() const;
 };
 
-/// CVODES steps one integration may take at model.noa = `noa` (kMaxIntegratorWork).
-long integrator_step_budget(int noa);
+/// Work units (WorkBudget's) of building the body a [sweep] sample flies, on the paper's
+/// basis: N³ (15 + p) + 400 (1 + noa / 10) p² for N = 3 + noa and p segments and point
+/// masses together (measured 0.05 s at noa 100 and p = 1, 0.56 s at p = 200: 4 ns a unit
+/// or less). Each sample is charged it.
+long long body_build_work(const Design& design);
 
 /// Reads and validates a design file. Throws DesignError (bad content, unreadable file,
 /// not a regular file, larger than design_limits::kMaxFileBytes).

@@ -74,6 +74,7 @@ class CollocationNlp {
       Eigen::MatrixXd xc, fc, Jc;    // HS compressed: nx x N, nx x N, nx x (nz N)
       Eigen::MatrixXd lam_eff, nu_eff;  // nx x P
       Eigen::MatrixXd D, Y, B;          // HS compressed: nx x q, nz x q, q x q
+      Eigen::MatrixXd Ya, Ha, HaYa;     // HS compressed: Y and H on the rows H can use
       ManeuverDynamics::Data dyn;
     } cache;
   };
@@ -237,7 +238,8 @@ class CollocationNlp {
   std::vector<std::vector<int>> uT_slots_;      // [control point][actuator], (T, u); free time
   std::vector<std::vector<int>> smooth_slots_;  // [interval*nu + actuator][pair]
   std::vector<int> smooth_pair_i_, smooth_pair_j_;  // local control indices, i >= j
-  std::vector<int> dense_act_, dense_trow_;     // HS compressed: block entries that can be nonzero
+  std::vector<int> dense_act_, dense_trow_;
+  std::vector<int> h_rows_;                     // HS compressed: z-indices in the dynamics' Hessian pattern     // HS compressed: block entries that can be nonzero
   std::vector<std::vector<int>> dense_slots_;   // HS compressed: [interval], pairs of dense_act_
   std::vector<std::vector<int>> denseT_slots_;  // HS compressed: [interval], (T, dense_trow_), (T, T)
   int TT_slot_ = -1;

@@ -97,6 +97,22 @@ struct EnumNames<Transcription> {
        {Transcription::HermiteSimpsonCompressed, "hermite_simpson_compressed"}}};
 };
 
+/// Which sparse symmetric indefinite factorization Ipopt's KKT systems get.
+enum class LinearSolver {
+  /// freeflex's own multifrontal LDLᵀ (threshold 1x1/2x2 pivoting, AMD order; docs/
+  /// benchmarks.md), served to Ipopt through its MA27 interface: Ipopt's ma27_* options
+  /// apply to it. Several times faster than MUMPS on the reference BLAS at these sizes.
+  Ldlt,
+  Mumps,  ///< Ipopt's MUMPS (sequential, Debian's reference BLAS); its mumps_* options apply
+};
+
+template <>
+struct EnumNames<LinearSolver> {
+  static constexpr const char* what = "linear solver";
+  static constexpr std::array<std::pair<LinearSolver, const char*>, 2> names{
+      {{LinearSolver::Ldlt, "ldlt"}, {LinearSolver::Mumps, "mumps"}}};
+};
+
 /// True for the Hermite–Simpson forms (controls at interval midpoints too).
 inline bool has_midpoints(Transcription t) { return t != Transcription::Trapezoidal; }
 
@@ -128,6 +144,7 @@ struct TrajoptOptions {
   double mesh_tolerance = 1e-6;  ///< [state units: m, rad, m/s, rad/s]
   int max_intervals = 5000;
 
+  LinearSolver linear_solver = LinearSolver::Ldlt;  ///< Ipopt's KKT factorization
   bool verbose = false;  ///< Ipopt's log on stdout at print_level 5 (otherwise silent)
   double tol = 1e-8;     ///< Ipopt tol
   int max_iter = 3000;   ///< Ipopt max_iter

@@ -66,6 +66,7 @@ struct TrajoptResult {
   double max_defect = 0.0;   ///< max |collocation defect| at the returned point (HS: incl. midpoint rows)
   double max_error_estimate = 0.0;  ///< max interval error estimate of the returned trajectory
   Transcription transcription = Transcription::HermiteSimpsonCompressed;
+  LinearSolver linear_solver = LinearSolver::Ldlt;
   int intervals = 0;                ///< N of the final mesh
   std::vector<MeshRound> rounds;    ///< first solve, then each refinement
 

@@ -1,0 +1,360 @@
+// Explicit embedded Runge-Kutta pairs with step-size control and dense output, behind
+// the piece stepper of sim/stepper.hpp (docs/theory.md section 8). Error control and
+// step-size choice as Hairer's DOP853: local extrapolation, error weights
+// atol_i + rtol max(|y_n,i|, |y_n+1,i|), the new step from err^(-1/(q+1)) with a safety
+// factor, changed by a factor within [1/3, 6], not grown right after a rejection.
+// Quadratures ride along as extra components outside the error test, so the states are
+// the same with or without them.
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstddef>
+#include <exception>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sim/rk_tableaus.hpp"
+#include "sim/stepper.hpp"
+#include "util/format.hpp"
+
+namespace freeflex {
+namespace {
+
+std::string fmt(double v) { return util::format_number(v, 12); }
+
+// Step-size control: Hairer's DOP853 takes safety 0.9 and no memory (beta 0); on the paper's
+// moment example 0.8 and beta 0.04 (Hairer's value for stabilized control) reached an error
+// of 1e-4 rad in θ with 20% fewer right-hand sides at NOA 6 and 16% fewer at NOA 20, since a
+// quarter of the steps were rejected at 0.9; Verner's pair did best with them too (7-8%
+// fewer than at 0.9 and beta 0; docs/benchmarks.md, explicit Runge-Kutta pairs).
+constexpr double kSafety = 0.8;
+constexpr double kBeta = 0.04;      ///< the new step also grows with (previous error)^beta
+constexpr double kMaxShrink = 3.0;  ///< a step is at least a third of the one before
+constexpr double kMaxGrowth = 6.0;  ///< and at most six times it
+
+class RungeKuttaStepper final : public detail::PieceStepper {
+ public:
+  RungeKuttaStepper(const OdeSystem& system, const IntegratorOptions& options, const detail::ButcherPair& tab)
+      : system_(system), options_(options), tab_(tab), n_(system.dim), nq_(system.quadrature_dim) {
+    const int N = n_ + nq_;
+    out_.setZero(n_);
+    quad_out_.setZero(nq_);
+    y_.setZero(N);
+    y_old_.setZero(N);
+    stage_.setZero(N);
+    K_.setZero(N, tab_.dense_stages);
+    Q_.setZero(N, tab_.dense.cols());
+    if (nq_ > 0) x_quad_.setZero(n_);
+    const VariableChange& change = system.variables;
+    atol_ = change.active() && change.atol_scale.size() == n_ ? Eigen::VectorXd(options.atol * change.atol_scale)
+                                                               : Eigen::VectorXd::Constant(n_, options.atol);
+    // the nonzero a(i, j) of each row: most are zero in the later stages of these pairs
+    rows_.resize(tab_.dense_stages);
+    for (int i = 0; i < tab_.dense_stages; ++i)
+      for (int j = 0; j < i; ++j)
+        if (tab_.a[i][j] != 0.0) rows_[i].push_back({j, tab_.a[i][j]});
+    for (int i = 0; i < tab_.stages; ++i)
+      if (tab_.e[i] != 0.0) e_.push_back({i, tab_.e[i]});
+    for (int i = 0; i < static_cast<int>(tab_.e3.size()); ++i)
+      if (tab_.e3[i] != 0.0) e3_.push_back({i, tab_.e3[i]});
+  }
+
+  double* state() override { return out_.data(); }
+  const double* quadrature() override { return quad_out_.data(); }
+
+  void start(double t0, double piece_mid) override {
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(nq_);
+    restart(t0, piece_mid, zero.data());
+  }
+
+  void restart(double t, double piece_mid, const double* quad) override {
+    y_.head(n_) = out_;
+    y_.tail(nq_) = Eigen::Map<const Eigen::VectorXd>(quad, nq_);
+    t_ = t;
+    piece_mid_ = piece_mid;
+    have_k0_ = false;     // the new piece's loads: k_0 and the first step are found again
+    have_step_ = false;
+    h_ = 0.0;
+    rejected_ = false;
+    err_old_ = 1e-4;
+  }
+
+  void stop_time(double b) override { stop_ = b; }
+
+  Outcome advance(double tout, long max_steps, bool budget_binds, WorkBudget* budget, long long step_work) override {
+    Outcome out;
+    for (long taken = 0;; ++taken) {
+      if (tout == t_) {
+        out_ = y_.head(n_);
+        quad_out_ = y_.tail(nq_);
+        break;
+      }
+      if (have_step_ && tout < t_ && tout >= t_old_) {
+        if (!interpolate(tout)) return failed(out);
+        break;
+      }
+      if (taken >= max_steps) {
+        out.message = std::string(tab_.name) + " failed at t = " + fmt(t_) + ": " +
+                      (budget_binds ? "the integration's step budget, max_total_steps = " +
+                                          std::to_string(options_.max_total_steps) +
+                                          ", is spent; the simulated span needs more work than it allows"
+                                    : "max_steps = " + std::to_string(options_.max_steps) +
+                                          " steps taken in this piece before reaching the next output time; the "
+                                          "problem may be stiff (use BDF) or max_steps too small");
+        return failed(out, false);
+      }
+      if (budget && budget->steps_left(step_work) < 1) {
+        budget->mark_exhausted();
+        out.message = "stopped at t = " + fmt(t_) + ": " + budget->spent_message();
+        return failed(out, false);
+      }
+      if (!step()) return failed(out);
+      if (budget) budget->charge(step_work);
+    }
+    out.reached = tout;
+    out.at_stop = tout == stop_ && t_ == stop_;
+    return out;
+  }
+
+  long steps() const override { return steps_; }
+  long rhs_evaluations() const override { return rhs_; }
+  const char* name() const override { return tab_.name; }
+
+ private:
+  struct Weight {
+    int j;
+    double v;
+  };
+
+  Outcome& failed(Outcome& out, bool with_reason = true) {
+    out.ok = false;
+    out.reached = t_;
+    if (with_reason) out.message = std::string(tab_.name) + " failed at t = " + fmt(t_) + ": " + why_;
+    return out;
+  }
+
+  /// k = f(t, y) for the augmented state (model, then quadratures); false with why_ set.
+  bool eval(double t, const Eigen::VectorXd& y, Eigen::Ref<Eigen::VectorXd> k) {
+    ++rhs_;
+    const Instant at{t, piece_mid_};
+    try {
+      if (!system_.rhs(at, y.head(n_), k.head(n_))) {
+        why_ = "right-hand side failed at t = " + fmt(t) + ": " + detail::user_message(system_, "right-hand side");
+        return false;
+      }
+      if (!k.head(n_).allFinite()) {
+        why_ = "right-hand side returned a non-finite derivative at t = " + fmt(t);
+        return false;
+      }
+      if (nq_ > 0) {
+        bool ok = false;
+        if (system_.variables.active()) {
+          system_.variables.to_x(at, y.head(n_), x_quad_);
+          ok = system_.quadrature(at, x_quad_, k.tail(nq_));
+        } else {
+          ok = system_.quadrature(at, y.head(n_), k.tail(nq_));
+        }
+        if (!ok || !k.tail(nq_).allFinite()) {
+          why_ = "the quadrature integrand failed or was not finite at t = " + fmt(t);
+          return false;
+        }
+      }
+      return true;
+    } catch (const std::exception& e) {
+      why_ = "right-hand side threw at t = " + fmt(t) + ": " + e.what();
+    } catch (...) {
+      why_ = "right-hand side threw an unknown exception at t = " + fmt(t);
+    }
+    return false;
+  }
+
+  /// stage_ = y + h Σ_j a(i, j) k_j: the sum first (as Hairer's code, so that y takes one
+  /// rounding), written as plain loops over the 18-90 entries, no library calls.
+  void form_stage(const Eigen::VectorXd& y, double h, int i) {
+    const int N = n_ + nq_;
+    double* __restrict s = stage_.data();
+    const double* __restrict yv = y.data();
+    const double* K = K_.data();
+    const std::vector<Weight>& row = rows_[i];
+    if (row.empty()) {
+      for (int r = 0; r < N; ++r) s[r] = yv[r];
+      return;
+    }
+    {
+      const double* __restrict k = K + static_cast<std::ptrdiff_t>(row[0].j) * N;
+      const double a = row[0].v;
+      for (int r = 0; r < N; ++r) s[r] = a * k[r];
+    }
+    for (std::size_t t = 1; t < row.size(); ++t) {
+      const double* __restrict k = K + static_cast<std::ptrdiff_t>(row[t].j) * N;
+      const double a = row[t].v;
+      for (int r = 0; r < N; ++r) s[r] += a * k[r];
+    }
+    for (int r = 0; r < N; ++r) s[r] = yv[r] + h * s[r];
+  }
+
+  /// Σ_r (Σ_j w_j k_j,r / sk_r)^2 over the model's components.
+  double weighted_sum(const std::vector<Weight>& ws, const Eigen::VectorXd& y_new) const {
+    const int N = n_ + nq_;
+    double sum = 0.0;
+    for (int r = 0; r < n_; ++r) {
+      double e = 0.0;
+      for (const Weight& w : ws) e += w.v * K_.data()[static_cast<std::ptrdiff_t>(w.j) * N + r];
+      const double sk = atol_[r] + options_.rtol * std::max(std::abs(y_[r]), std::abs(y_new[r]));
+      sum += (e / sk) * (e / sk);
+    }
+    return sum;
+  }
+
+  /// The scaled error of the step just formed (<= 1: accepted).
+  double error_norm(double h, const Eigen::VectorXd& y_new) const {
+    const double e = weighted_sum(e_, y_new);
+    if (e3_.empty()) return std::abs(h) * std::sqrt(e / n_);
+    // DOP853: the fifth-order estimate, damped where the third-order one is small
+    double den = e + 0.01 * weighted_sum(e3_, y_new);
+    if (!(den > 0.0)) den = 1.0;
+    return std::abs(h) * e * std::sqrt(1.0 / (n_ * den));
+  }
+
+  /// Hairer's starting step (Solving ODE I, II.4): an Euler step to gauge f', then the
+  /// step whose leading error term would be 0.01.
+  bool initial_step() {
+    const int N = n_ + nq_;
+    double dnf = 0.0, dny = 0.0;
+    for (int r = 0; r < n_; ++r) {
+      const double sk = atol_[r] + options_.rtol * std::abs(y_[r]);
+      dnf += (K_(r, 0) / sk) * (K_(r, 0) / sk);
+      dny += (y_[r] / sk) * (y_[r] / sk);
+    }
+    double h = dnf <= 1e-10 || dny <= 1e-10 ? 1e-6 : std::sqrt(dny / dnf) * 0.01;
+    if (options_.max_step > 0.0) h = std::min(h, options_.max_step);
+    h = std::min(h, stop_ - t_);
+    for (int r = 0; r < N; ++r) stage_[r] = y_[r] + h * K_(r, 0);
+    if (!eval(t_ + h, stage_, K_.col(1))) return false;
+    double der2 = 0.0;
+    for (int r = 0; r < n_; ++r) {
+      const double sk = atol_[r] + options_.rtol * std::abs(y_[r]);
+      der2 += ((K_(r, 1) - K_(r, 0)) / sk) * ((K_(r, 1) - K_(r, 0)) / sk);
+    }
+    const double der12 = std::max(std::sqrt(der2) / h, std::sqrt(dnf));
+    const double h1 = der12 <= 1e-15 ? std::max(1e-6, h * 1e-3) : std::pow(0.01 / der12, 1.0 / tab_.order);
+    h_ = std::min(100.0 * h, h1);
+    if (options_.max_step > 0.0) h_ = std::min(h_, options_.max_step);
+    return true;
+  }
+
+  /// One accepted step towards stop_ (after any rejections); false with why_ set.
+  bool step() {
+    const int s = tab_.stages;
+    if (!have_k0_) {
+      if (!eval(t_, y_, K_.col(0))) return false;
+      have_k0_ = true;
+    } else if (tab_.fsal) {
+      K_.col(0) = K_.col(s - 1);
+    }
+    if (h_ == 0.0 && !initial_step()) return false;
+    const double expo = 1.0 / (tab_.error_order + 1) - 0.2 * kBeta;  // Hairer's exponent with memory
+    for (;;) {
+      double h = h_;
+      if (options_.max_step > 0.0) h = std::min(h, options_.max_step);
+      bool to_stop = false;
+      if (t_ + 1.01 * h > stop_) {  // no sliver of a step left before the stop time
+        h = stop_ - t_;
+        to_stop = true;
+      }
+      if (!(0.1 * h > std::abs(t_) * DBL_EPSILON)) {
+        why_ = "the step size fell to " + fmt(h) + " s, round-off at this t: the solution may be singular, the "
+               "right-hand side discontinuous at a time that is not a breakpoint, or the problem stiff (use BDF)";
+        return false;
+      }
+      for (int i = 1; i < s; ++i) {
+        form_stage(y_, h, i);
+        if (!eval(t_ + tab_.c[i] * h, stage_, K_.col(i))) return false;
+      }
+      // with FSAL the last stage was formed at y_n+1; else form it from b
+      if (!tab_.fsal) {
+        stage_ = y_;
+        for (int i = 0; i < s; ++i)
+          if (tab_.b[i] != 0.0) stage_.noalias() += (h * tab_.b[i]) * K_.col(i);
+      }
+      const double err = error_norm(h, stage_);
+      if (err <= 1.0) {
+        double grow = err > 0.0 ? kSafety * std::pow(err, -expo) * std::pow(err_old_, kBeta) : kMaxGrowth;
+        err_old_ = std::max(err, 1e-4);
+        grow = std::min(kMaxGrowth, std::max(1.0 / kMaxShrink, grow));
+        if (rejected_) grow = std::min(grow, 1.0);
+        rejected_ = false;
+        y_old_.swap(y_);
+        y_ = stage_;
+        t_old_ = t_;
+        t_ = to_stop ? stop_ : t_ + h;
+        h_step_ = h;
+        h_ = h * grow;
+        have_step_ = true;
+        dense_ready_ = false;
+        if (!tab_.fsal) have_k0_ = false;
+        ++steps_;
+        return true;
+      }
+      // rejected (a non-finite error too: the step shrinks until it is too small)
+      const double shrink = std::isfinite(err) ? std::min(kMaxShrink, std::pow(err, expo) / kSafety) : kMaxShrink;
+      h_ = h / shrink;
+      rejected_ = true;
+    }
+  }
+
+  /// out_, quad_out_ = y(tout) on the last step, from its dense output.
+  bool interpolate(double tout) {
+    const int N = n_ + nq_;
+    if (!dense_ready_) {
+      for (int i = tab_.stages; i < tab_.dense_stages; ++i) {
+        form_stage(y_old_, h_step_, i);
+        if (!eval(t_old_ + tab_.c[i] * h_step_, stage_, K_.col(i))) return false;
+      }
+      Q_.noalias() = K_ * tab_.dense;
+      dense_ready_ = true;
+    }
+    const double theta = (tout - t_old_) / h_step_;
+    const int deg = static_cast<int>(Q_.cols());
+    for (int r = 0; r < N; ++r) {
+      double p = 0.0;
+      for (int j = deg - 1; j >= 0; --j) p = (p + Q_(r, j)) * theta;
+      const double v = y_old_[r] + h_step_ * p;
+      if (r < n_)
+        out_[r] = v;
+      else
+        quad_out_[r - n_] = v;
+    }
+    return true;
+  }
+
+  const OdeSystem& system_;
+  const IntegratorOptions& options_;
+  const detail::ButcherPair& tab_;
+  const int n_, nq_;
+  std::vector<std::vector<Weight>> rows_;
+  std::vector<Weight> e_, e3_;
+  Eigen::VectorXd atol_;
+  Eigen::VectorXd out_, quad_out_;  ///< the state at the time last reached, as the driver reads it
+  Eigen::VectorXd y_, y_old_, stage_, x_quad_;
+  Eigen::MatrixXd K_, Q_;           ///< stages (columns); dense output's coefficients
+  double t_ = 0.0, t_old_ = 0.0, stop_ = 0.0, piece_mid_ = 0.0;
+  double h_ = 0.0;       ///< the next step to try (0: to be chosen)
+  double h_step_ = 0.0;  ///< of the last accepted step, [t_old_, t_]
+  bool have_k0_ = false, have_step_ = false, dense_ready_ = false, rejected_ = false;
+  long steps_ = 0, rhs_ = 0;
+  std::string why_;
+  double err_old_ = 1e-4;  ///< of the last accepted step (Hairer's facold)
+};
+
+}  // namespace
+
+std::unique_ptr<detail::PieceStepper> detail::runge_kutta_stepper(const OdeSystem& system,
+                                                                  const IntegratorOptions& options) {
+  return std::make_unique<RungeKuttaStepper>(
+      system, options, options.method == IntegratorOptions::Method::Verner98 ? detail::verner98() : detail::dop853());
+}
+
+}  // namespace freeflex

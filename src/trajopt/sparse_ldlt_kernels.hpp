@@ -1,0 +1,17 @@
+#pragma once
+// Dense kernel of the sparse LDLᵀ's fronts (sparse_ldlt_kernels.cpp).
+
+namespace freeflex::detail {
+
+/// C(i, j) -= Σ_{c < p} L(i, c) W(j, c) for 0 <= j < cols and j <= i < rows; all three
+/// column major with leading dimensions ldl, ldw, ldc. Entries just above the diagonal
+/// (within 4-column blocks) may be written too: callers keep only the lower triangle.
+void trapezoid_update(int rows, int cols, int p, const double* L, int ldl, const double* W, int ldw, double* C, int ldc);
+
+/// y -= A x: A rows x p, column major with leading dimension lda.
+void column_update(int rows, int p, const double* A, int lda, const double* x, double* y);
+
+/// max_i |x_i| over n entries (0 when n <= 0).
+double max_abs(const double* x, int n);
+
+}  // namespace freeflex::detail
