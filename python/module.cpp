@@ -215,7 +215,10 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("rtol", &TvlqrOptions::rtol)
       .def_readwrite("atol", &TvlqrOptions::atol)
       .def_readwrite("Qf", &TvlqrOptions::Qf)
-      .def_readwrite("breakpoints", &TvlqrOptions::breakpoints);
+      .def_readwrite("breakpoints", &TvlqrOptions::breakpoints)
+      .def_property(
+          "method", [](const TvlqrOptions& o) { return std::string(to_string(o.method)); },
+          [](TvlqrOptions& o, const std::string& s) { o.method = enum_from<TvlqrOptions::Method>("TvlqrOptions.method", s); });
   py::class_<TrajoptOptions>(m, "TrajoptOptions")
       .def(py::init<>())
       .def_readwrite("intervals", &TrajoptOptions::intervals)
@@ -274,6 +277,8 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readonly("P0", &TvlqrResult::P0)
       .def_readonly("Qf", &TvlqrResult::Qf)
       .def_readonly("wall_time_s", &TvlqrResult::wall_time_s)
+      .def_property_readonly("method", [](const TvlqrResult& r) { return std::string(to_string(r.method)); })
+      .def_readonly("steps", &TvlqrResult::steps)
       .def("gain", [](const TvlqrResult& r, double t) {
         finite_or_throw("gain: t", t);
         if (r.K.empty()) throw std::invalid_argument("gain: the TV-LQR has no gains (it failed: " + r.message + ")");

@@ -169,6 +169,7 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   SuppressionOptions options;
   options.simulation = comparison_options(design);
   options.tvlqr.grid_step_s = st.grid_step_s;
+  options.tvlqr.method = st.tvlqr_method;
   options.closed_loop.rtol = st.closed_loop_rtol;
   options.closed_loop.atol = st.closed_loop_atol;
   options.closed_loop_first_order_method = st.closed_loop_first_order_method;
@@ -361,6 +362,8 @@ Json to_json(const Design& design, const SuppressionStudyResult& r) {
   js["work_budget_units"] = r.work_budget_units;
   js["tvlqr_status"] = chain.law.ok() ? "ok" : chain.law.message;
   js["tvlqr_solve_time_s"] = chain.law.wall_time_s;
+  js["tvlqr_method"] = to_string(chain.law.method);  // the one used ("auto" resolved)
+  js["tvlqr_steps"] = chain.law.steps;
   if (r.rigid_chain) js["rigid_optimum_tvlqr_status"] = r.rigid_chain->law.ok() ? "ok" : r.rigid_chain->law.message;
   if (chain.law.terminal_care) {
     js["terminal_care_residual"] = chain.law.terminal_care->residual;

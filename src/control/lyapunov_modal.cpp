@@ -59,9 +59,73 @@ Eigen::Matrix2d block_solve(int p, int q, double c, const Eigen::Matrix2d& P, do
   return X;
 }
 
+/// Swaps the adjacent diagonal blocks of sizes p and q starting at row j of the real
+/// Schur form T (and the columns of Z), by an orthogonal similarity (LAPACK's direct
+/// swap, dlaexc). False, changing nothing, when the swap would not keep T block upper
+/// triangular to round-off (blocks with close eigenvalues).
+bool swap_blocks(Eigen::MatrixXd& T, Eigen::MatrixXd& Z, int j, int p, int q) {
+  const int n = static_cast<int>(T.rows()), m = p + q;
+  Eigen::MatrixXd Qs;
+  if (p == 1 && q == 1) {  // a Givens rotation taking [t12; t22 − t11] to [r; 0]
+    const double f = T(j, j + 1), g = T(j + 1, j + 1) - T(j, j), r = std::hypot(f, g);
+    if (r == 0.0) return true;  // equal eigenvalues, no coupling: nothing to swap
+    Qs.resize(2, 2);
+    Qs << f / r, -g / r, g / r, f / r;
+  } else {  // T11 X − X T22 = T12, then Q from the QR of [−X; I]
+    const Eigen::MatrixXd T11 = T.block(j, j, p, p), T22 = T.block(j + p, j + p, q, q), T12 = T.block(j, j + p, p, q);
+    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(p * q, p * q);
+    for (int c = 0; c < q; ++c)
+      for (int r = 0; r < p; ++r)
+        for (int k = 0; k < p; ++k) K(r + p * c, k + p * c) += T11(r, k);
+    for (int c = 0; c < q; ++c)
+      for (int r = 0; r < p; ++r)
+        for (int k = 0; k < q; ++k) K(r + p * c, r + p * k) -= T22(k, c);
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(K);
+    if (!lu.isInvertible()) return false;
+    const Eigen::VectorXd x = lu.solve(Eigen::Map<const Eigen::VectorXd>(T12.data(), p * q));
+    Eigen::MatrixXd M(m, q);
+    M.topRows(p) = -Eigen::Map<const Eigen::MatrixXd>(x.data(), p, q);
+    M.bottomRows(q).setIdentity();
+    Qs = Eigen::HouseholderQR<Eigen::MatrixXd>(M).householderQ();
+  }
+  const Eigen::MatrixXd D = Qs.transpose() * T.block(j, j, m, m) * Qs;
+  // the new (2,1) block must vanish: else the blocks were too close to swap stably
+  if (!(D.bottomLeftCorner(p, q).norm() <= 1e-12 * (T.block(j, j, m, m).norm() + DBL_MIN))) return false;
+  T.middleRows(j, m) = Qs.transpose() * T.middleRows(j, m);
+  T.middleCols(j, m) = T.middleCols(j, m) * Qs;
+  Z.middleCols(j, m) = Z.middleCols(j, m) * Qs;
+  T.block(j + q, j, p, q).setZero();
+  for (int i = j + m; i < n; ++i) T.block(i, j, 1, m).setZero();  // round-off below the blocks
+  return true;
+}
+
+/// Moves the real eigenvalues of T to its end, sorted, so that near-equal ones become
+/// adjacent (a near-defective pair is merged only when adjacent); swaps that would not be
+/// stable are skipped. Costs O(n) swaps of O(n) each.
+void sort_real_eigenvalues(Eigen::MatrixXd& T, Eigen::MatrixXd& Z) {
+  const int n = static_cast<int>(T.rows());
+  auto size_at = [&](int i) { return (i + 1 < n && T(i + 1, i) != 0.0) ? 2 : 1; };
+  for (bool moved = true; moved;) {
+    moved = false;
+    for (int i = 0; i < n;) {
+      const int p = size_at(i);
+      if (i + p >= n) break;
+      const int q = size_at(i + p);
+      // a real block before a complex one, or two reals out of order
+      const bool out_of_order = p == 1 && (q == 2 || T(i, i) > T(i + 1, i + 1));
+      if (out_of_order && swap_blocks(T, Z, i, p, q)) {
+        moved = true;
+        i += q;
+      } else {
+        i += p;
+      }
+    }
+  }
+}
+
 }  // namespace
 
-bool ModalLyapunovSolver::factorize(const Eigen::Ref<const Eigen::MatrixXd>& A, double max_condition) {
+bool ModalLyapunovSolver::factorize(const Eigen::Ref<const Eigen::MatrixXd>& A, double max_condition, bool sort) {
   if (A.rows() != A.cols())
     throw std::invalid_argument("ModalLyapunovSolver: expected a square A, got " + std::to_string(A.rows()) + " x " +
                                 std::to_string(A.cols()));
@@ -71,7 +135,10 @@ bool ModalLyapunovSolver::factorize(const Eigen::Ref<const Eigen::MatrixXd>& A, 
   const int n = static_cast<int>(A.rows());
   const Eigen::RealSchur<Eigen::MatrixXd> schur(A);
   if (schur.info() != Eigen::Success) return false;
-  const Eigen::MatrixXd& T = schur.matrixT();
+  T_ = schur.matrixT();
+  Z_ = schur.matrixU();
+  if (sort) sort_real_eigenvalues(T_, Z_);
+  const Eigen::MatrixXd& T = T_;
   scale_ = A.norm();
   blocks_.clear();
   std::vector<Eigen::Matrix2d> N;
@@ -116,9 +183,9 @@ bool ModalLyapunovSolver::factorize(const Eigen::Ref<const Eigen::MatrixXd>& A, 
       Y.block(i0, j0, p, q) = X.topLeftCorner(p, q);
     }
   }
-  V_.noalias() = schur.matrixU() * Y;
+  V_.noalias() = Z_ * Y;
   const Eigen::MatrixXd Yinv = Y.triangularView<Eigen::UnitUpper>().solve(Eigen::MatrixXd::Identity(n, n));
-  U_.noalias() = Yinv * schur.matrixU().transpose();
+  U_.noalias() = Yinv * Z_.transpose();
   // balance: one scale per block commutes with D
   for (const Block& b : blocks_) {
     const double nrm = V_.middleCols(b.start, b.size).norm() / std::sqrt(double(b.size));

@@ -70,8 +70,12 @@ class ModalLyapunovSolver {
  public:
   /// Block-diagonalizes A (square, finite, else std::invalid_argument). Returns false and
   /// leaves the solver unusable when the Schur decomposition fails or κ₁(V) =
-  /// ‖V‖₁‖V⁻¹‖₁ (columns balanced block by block) exceeds max_condition.
-  bool factorize(const Eigen::Ref<const Eigen::MatrixXd>& A, double max_condition);
+  /// ‖V‖₁‖V⁻¹‖₁ (columns balanced block by block) exceeds max_condition. With `sort`, the
+  /// real eigenvalues are first moved to the end of the Schur form in ascending order, so
+  /// that a near-defective pair the Schur form left apart becomes adjacent and is kept as
+  /// one block (the exponential integrator needs a well-conditioned V at every step; the
+  /// Newton solves fall back to the Schur solver instead).
+  bool factorize(const Eigen::Ref<const Eigen::MatrixXd>& A, double max_condition, bool sort = false);
 
   bool ok() const { return ok_; }
   int size() const { return static_cast<int>(V_.rows()); }
@@ -89,19 +93,28 @@ class ModalLyapunovSolver {
   /// As LyapunovSolver::solve_transposed.
   bool solve_transposed(const Eigen::Ref<const Eigen::VectorXd>& r, double mu, Eigen::VectorXd& z) const;
 
- private:
-  /// W ← solution of D_Iᵀ W + W D_J + 2σ W = W block by block (blocks I <= J only when
-  /// `upper`); false if some block equation is singular.
-  bool solve_blocks(Eigen::MatrixXd& W, double sigma, bool upper) const;
-
+  /// The form itself (valid when ok()), for the exponential integrator of the TV-LQR:
+  /// A = V D V⁻¹ with D's diagonal blocks below.
   struct Block {
     int start, size;
     double mid;              // the block is mid·I + N, N trace-free (zero for 1x1)
     double n00, n01, n10;    // N = [[n00, n01], [n10, −n00]]
     double det, beta;        // det N; sqrt(det N) when > 0 (complex pair mid ± iβ), else −1
   };
+  const std::vector<Block>& blocks() const { return blocks_; }
+  const Eigen::MatrixXd& V() const { return V_; }
+  const Eigen::MatrixXd& Vinv() const { return U_; }
+  const Eigen::MatrixXd& Vt() const { return Vt_; }
+  const Eigen::MatrixXd& Vinv_t() const { return Ut_; }
+
+ private:
+  /// W ← solution of D_Iᵀ W + W D_J + 2σ W = W block by block (blocks I <= J only when
+  /// `upper`); false if some block equation is singular.
+  bool solve_blocks(Eigen::MatrixXd& W, double sigma, bool upper) const;
+
   bool ok_ = false;
   Eigen::MatrixXd V_, U_, Vt_, Ut_;    // V, V⁻¹ and their transposes
+  Eigen::MatrixXd T_, Z_;              // the (sorted) real Schur form
   std::vector<Block> blocks_;          // diagonal blocks of D
   double scale_ = 0.0, condition_ = 0.0;
   mutable Eigen::MatrixXd work_, rhs_;

@@ -1,5 +1,5 @@
-// TV-LQR (control/tvlqr.hpp): validation, the grid of stored gains, the backward sweep of
-// the Riccati flow through the shared CVODES wrapper, and the law's interpolation.
+// TV-LQR (control/tvlqr.hpp): validation, the grid of stored gains and the terminal
+// weight, the choice of sweep (control/tvlqr_sweep.hpp), and the law's interpolation.
 #include "freeflex/control/tvlqr.hpp"
 
 #include <algorithm>
@@ -7,8 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "control/riccati_flow.hpp"
-#include "sim/cvodes.hpp"
+#include "control/tvlqr_sweep.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
@@ -69,12 +68,18 @@ class ModelEvaluator : public detail::LtvEvaluator {
   FirstOrderModel::Data data_;
 };
 
-/// The sweep itself, for any evaluator of the model (arguments validated).
+/// The grid, pieces and terminal weight of a problem (arguments validated), then the sweep
+/// of the chosen method (control/tvlqr_sweep.hpp).
 TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<double>& model_breakpoints, double t0,
-                  double tf, const Eigen::MatrixXd& Q, const Eigen::MatrixXd& R, const TvlqrOptions& o) {
+                  double tf, const Eigen::MatrixXd& Q, const Eigen::MatrixXd& R, const TvlqrOptions& o,
+                  const detail::RotatingFrame* frame) {
   using namespace detail;
   const auto clock0 = std::chrono::steady_clock::now();
   TvlqrResult res;
+  auto done = [&]() -> TvlqrResult {
+    res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
+    return std::move(res);
+  };
 
   // Pieces [bounds_k, bounds_k+1] and the output grid (every bound is a grid time).
   const double span = tf - t0, merge = 1e-10 * span;
@@ -108,23 +113,21 @@ TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<d
   }
   const int G = static_cast<int>(grid.size());
 
-  RiccatiData d;
-  d.model = &model;
-  d.tf = tf;
-  d.n = n;
-  d.m = m;
-  d.Rllt.compute(0.5 * (R + R.transpose()));
-  d.max_condition = o.modal_max_condition;
-  d.piece_mid_t = 0.5 * (bounds[bounds.size() - 2] + bounds.back());
-
-  // Terminal weight.
+  // Terminal weight: given, or the CARE solution of the model at tf.
   if (o.Qf) {
     res.Qf = 0.5 * (*o.Qf + o.Qf->transpose());
   } else {
+    RiccatiData d;
+    d.model = &model;
+    d.tf = tf;
+    d.n = n;
+    d.m = m;
+    d.Rllt.compute(0.5 * (R + R.transpose()));
+    d.piece_mid_t = 0.5 * (bounds[bounds.size() - 2] + bounds.back());
     if (!d.eval(tf)) {
       res.status = TvlqrResult::Status::TerminalCareFailed;
       res.message = "terminal CARE: " + d.error;
-      return res;
+      return done();
     }
     CareOptions co;
     co.restrict_to_controllable = true;
@@ -133,118 +136,59 @@ TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<d
       res.status = TvlqrResult::Status::TerminalCareFailed;
       res.message = "terminal CARE at tf = " + fmt(tf) + " s failed: " + care.message;
       res.terminal_care = std::move(care);
-      return res;
+      return done();
     }
     res.Qf = care.P;
     res.terminal_care = std::move(care);
   }
-  d.sigma = std::max(res.Qf.cwiseAbs().maxCoeff(), Q.cwiseAbs().maxCoeff());
-  if (!(d.sigma > 0.0)) d.sigma = 1.0;
-  d.Qs = 0.5 * (Q + Q.transpose()) / d.sigma;
-
   res.t = grid;
   res.K.assign(G, Eigen::MatrixXd());
   res.feedforward.setZero(G, m);
   if (o.store_riccati) res.P.assign(G, Eigen::MatrixXd());
 
-  const int nt = tri_size(n), dim = nt + n + 1;
-  cvodes::Integrator cv(dim, cvodes::Integrator::Method::Bdf, "solve_tvlqr");
-  double* y = cv.state();
-  Eigen::Map<Eigen::VectorXd>(y, dim).setZero();
-  pack(res.Qf / d.sigma, y);
-
-  Eigen::MatrixXd Psym, Krec;  // scratch of record()
-  Eigen::VectorXd ffrec;
-  auto record = [&](int idx) -> bool {
-    const double t = grid[idx];
-    if (!d.eval(t)) return false;
-    unpack(y, n, Psym);
-    Psym *= d.sigma;
-    Eigen::Map<const Eigen::VectorXd> sh(y + nt, n);
-    Krec.noalias() = d.B().transpose() * Psym;
-    d.Rllt.solveInPlace(Krec);
-    res.K[idx] = Krec;
-    ffrec.noalias() = d.B().transpose() * sh;
-    d.Rllt.solveInPlace(ffrec);
-    res.feedforward.row(idx) = -d.sigma * ffrec.transpose();
-    if (o.store_riccati) res.P[idx] = Psym;
-    if (idx == 0) {
-      res.P0 = Psym;
-      res.s0 = d.sigma * sh;
-      res.c0 = d.sigma * y[nt + n];
-    }
-    return true;
-  };
-  auto finish = [&](TvlqrResult::Status st, std::string msg) {
-    res.status = st;
-    res.message = std::move(msg);
-    res.preconditioner_setups = d.setups;
-    res.modal_setups = d.modal_setups;
-    res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0).count();
-    return res;
-  };
-
-  cv.init(freeflex_riccati_rhs, 0.0, &d);
-  cv.scalar_tolerances(o.rtol, o.atol);
-  cv.max_num_steps(o.max_steps);
-  DirectSolverContent direct{&d, cv.memory()};
-  if (o.newton_solver == TvlqrOptions::NewtonSolver::Lyapunov)
-    cv.matrix_embedded(make_direct_solver(cv.context(), &direct));
+  Sweep sw;
+  sw.model = &model;
+  sw.n = n;
+  sw.m = m;
+  sw.t0 = t0;
+  sw.tf = tf;
+  sw.bounds = bounds;
+  sw.grid = grid;
+  sw.Q = 0.5 * (Q + Q.transpose());
+  sw.R = 0.5 * (R + R.transpose());
+  sw.options = &o;
+  sw.frame = frame;
+  sw.result = &res;
+  const bool exponential = o.method == TvlqrOptions::Method::Exponential ||
+                           (o.method == TvlqrOptions::Method::Auto && n >= TvlqrOptions::kAutoExponentialStates);
+  res.method = exponential ? TvlqrOptions::Method::Exponential : TvlqrOptions::Method::Bdf;
+  if (exponential)
+    sweep_exponential(sw);
   else
-    cv.gmres(10, freeflex_riccati_psetup, freeflex_riccati_psolve, freeflex_riccati_jtsetup, freeflex_riccati_jtimes);
+    sweep_bdf(sw);
+  return done();
+}
 
-  auto add_stats = [&]() {
-    const cvodes::Counters c = cv.counters();
-    res.steps += c.steps;
-    res.rhs_evaluations += c.rhs_evaluations;
-    res.linear_iterations += c.linear_iterations;
+/// The first-order model's rotating frame: its x1 = [R1, θ1, q, R1', θ1', q'] has the
+/// displacement and velocity of o in inertial axes, its dynamics are body-fixed. Used when
+/// Q is unchanged by the rotation (as vibration_weight's is), so that the weight needs no
+/// transformation; else null (the exponential sweep then takes shorter steps).
+std::unique_ptr<detail::RotatingFrame> rotating_frame(const FirstOrderModel& model, const Eigen::MatrixXd& Q) {
+  const int N = model.body().dofs();
+  auto f = std::make_unique<detail::RotatingFrame>();
+  f->pairs = {0, N};
+  Eigen::MatrixXd T = Eigen::MatrixXd::Identity(2 * N, 2 * N);
+  const double c = std::cos(0.7), s = std::sin(0.7);  // a generic angle
+  for (int i : f->pairs) T.block(i, i, 2, 2) << c, -s, s, c;
+  const Eigen::MatrixXd Qs = 0.5 * (Q + Q.transpose());
+  if (!((T.transpose() * Qs * T - Qs).norm() <= 1e-12 * Qs.norm())) return nullptr;
+  const RigidTrajectory& nom = model.nominal();
+  f->angle = [&nom](const Instant& at, double& angle, double& rate) {
+    const RigidState st = nom.at(at);
+    angle = st.pos(2);
+    rate = st.vel(2);
   };
-
-  const long long work = riccati_step_work(n);
-  int idx = G - 1;
-  if (!record(idx)) return finish(TvlqrResult::Status::IntegrationFailed, d.error);
-  --idx;
-  const int pieces = static_cast<int>(bounds.size()) - 1;
-  for (int p = pieces - 1; p >= 0; --p) {
-    const double a_t = bounds[p], b_t = bounds[p + 1];
-    const double tau_a = tf - b_t, tau_b = tf - a_t;
-    d.piece_mid_t = 0.5 * (a_t + b_t);
-    d.cached = false;
-    d.have_pre = false;  // the model may jump at a breakpoint: refresh the frozen closed loop
-    if (p != pieces - 1) cv.reinit(tau_a);
-    cv.stop_time(tau_b);
-    while (idx >= 0 && grid[idx] >= a_t) {
-      const double tau_out = (grid[idx] == a_t) ? tau_b : tf - grid[idx];
-      bool by_budget = false;
-      const cvodes::Integrator::Advance step = cv.advance(tau_out, o.max_steps, o.budget.get(), work, by_budget);
-      const double tret = step.reached;
-      if (step.flag == CV_TOO_MUCH_WORK && by_budget) {
-        add_stats();
-        return finish(TvlqrResult::Status::IntegrationFailed,
-                      "stopped at t = " + fmt(tf - tret) + " s: " + o.budget->spent_message());
-      }
-      if (step.flag < 0) {
-        add_stats();
-        std::string msg = "CVODES failed at t = " + fmt(tf - tret) + " s: " + cvodes::Integrator::flag_name(step.flag);
-        // CVODES's own message counts the backward time τ = tf - t.
-        const std::string why = !d.error.empty()         ? d.error
-                                : cv.last_error().empty() ? ""
-                                                          : cv.last_error() + " [τ = tf - t]";
-        if (!why.empty()) msg += " (" + why + ")";
-        return finish(TvlqrResult::Status::IntegrationFailed, msg);
-      }
-      if (!Eigen::Map<const Eigen::VectorXd>(y, dim).allFinite()) {
-        add_stats();
-        return finish(TvlqrResult::Status::IntegrationFailed,
-                      "the Riccati solution became non-finite at t = " + fmt(tf - tret) + " s");
-      }
-      if (!record(idx)) return finish(TvlqrResult::Status::IntegrationFailed, d.error);
-      if (o.progress) o.progress(tf - grid[idx]);
-      --idx;
-    }
-    add_stats();
-  }
-  return finish(TvlqrResult::Status::Solved, "solved");
+  return f;
 }
 
 }  // namespace
@@ -283,14 +227,15 @@ TvlqrResult solve_tvlqr(const FirstOrderModel& model, double t0, double tf, cons
   const LtvSystem sys = ltv_system(model);
   validate(sys, t0, tf, Q, R, options);
   ModelEvaluator evaluator(model);
-  return sweep(evaluator, sys.state_size, sys.input_size, sys.breakpoints, t0, tf, Q, R, options);
+  const std::unique_ptr<detail::RotatingFrame> frame = rotating_frame(model, Q);
+  return sweep(evaluator, sys.state_size, sys.input_size, sys.breakpoints, t0, tf, Q, R, options, frame.get());
 }
 
 TvlqrResult solve_tvlqr(const LtvSystem& sys, double t0, double tf, const Eigen::MatrixXd& Q, const Eigen::MatrixXd& R,
                         const TvlqrOptions& options) {
   validate(sys, t0, tf, Q, R, options);
   FunctionEvaluator evaluator(sys);
-  return sweep(evaluator, sys.state_size, sys.input_size, sys.breakpoints, t0, tf, Q, R, options);
+  return sweep(evaluator, sys.state_size, sys.input_size, sys.breakpoints, t0, tf, Q, R, options, nullptr);
 }
 
 namespace {

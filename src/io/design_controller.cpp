@@ -91,6 +91,7 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
   st.closed_loop_atol = c.number("closed_loop_atol", tolerance, false).value_or(st.closed_loop_atol);
   st.closed_loop_first_order_method = c.enumerated<ClosedLoopMethod>("closed_loop_first_order_method", false)
                                           .value_or(st.closed_loop_first_order_method);
+  st.tvlqr_method = c.enumerated<TvlqrOptions::Method>("tvlqr_method", false).value_or(st.tvlqr_method);
   auto gauss_steps = c.integer("closed_loop_gauss_steps", 1, 1000, false);
   st.closed_loop_gauss_steps = static_cast<int>(gauss_steps.value_or(st.closed_loop_gauss_steps));
   c.finish();

@@ -15,10 +15,14 @@
 #include "freeflex/control/lyapunov.hpp"
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/sim/integrator.hpp"
+#include "support/bodies.hpp"
 
 using namespace freeflex;
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;
+using freeflex_test::actuated_beam;
+using freeflex_test::no_commands;
+using freeflex_test::RestTrajectory;
 
 namespace {
 
@@ -27,32 +31,6 @@ Eigen::MatrixXd care_residual(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B
   return A.transpose() * P + P * A - P * B * R.inverse() * B.transpose() * P + Q;
 }
 
-/// The paper beam (1 m, 1 kg, EI 1, o at the centre) with a torque at o and body-y
-/// thrusters at both tips: the actuators of the control tests.
-FlexibleBody actuated_beam(int noa) {
-  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
-  return FlexibleBody(beam, noa,
-                      {{"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                       {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
-}
-
-/// The beam held at rest at a fixed attitude: a time-invariant first-order model.
-class RestTrajectory : public RigidTrajectory {
- public:
-  explicit RestTrajectory(double theta) { s_.pos(2) = theta; }
-  RigidState at(const Instant&) const override { return s_; }
-  double t_begin() const override { return 0.0; }
-  double t_end() const override { return 0.0; }
-  std::vector<double> breakpoints() const override { return {}; }
-
- private:
-  RigidState s_;
-};
-
-CommandFunction no_commands() {
-  return [](const Instant&, Eigen::Ref<Eigen::VectorXd> c) { c.setZero(); };
-}
 
 }  // namespace
 

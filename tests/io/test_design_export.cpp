@@ -69,3 +69,13 @@ TEST_CASE("[controller] closed_loop_first_order_method and closed_loop_gauss_ste
                                        "closed_loop_gauss_steps = 1000\n"),
              Contains("closed_loop_gauss_steps") && Contains("units of work"));
 }
+
+TEST_CASE("[controller] tvlqr_method", "[io]") {
+  const Design d = parse_design(kController + "tvlqr_method = \"exponential\"\n", "t");
+  REQUIRE(d.controller);
+  CHECK(d.controller->tvlqr_method == TvlqrOptions::Method::Exponential);
+  CHECK(parse_design(kController + "tvlqr_method = \"bdf\"\n", "t").controller->tvlqr_method == TvlqrOptions::Method::Bdf);
+  CHECK(parse_design(kController, "t").controller->tvlqr_method == TvlqrOptions::Method::Auto);
+  CHECK_THAT(problems_of(kController + "tvlqr_method = \"rk4\"\n"),
+             Contains("line 22") && Contains("tvlqr_method") && Contains("'exponential'"));
+}

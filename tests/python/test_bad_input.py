@@ -25,6 +25,11 @@ def test_messages_name_the_key(tmp_path):
         ff.ForceElement("x", "rocket", 0.0)
     with pytest.raises(ValueError, match="transcription"):
         ff.TrajoptOptions().transcription = "euler"
+    with pytest.raises(ValueError, match="TV-LQR method"):
+        ff.TvlqrOptions().method = "rk4"
+    o = ff.TvlqrOptions()
+    o.method = "exponential"
+    assert o.method == "exponential"
     bad = tmp_path / "bad.toml"
     bad.write_text('[beam]\nlength_m = -1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n')
     with pytest.raises(ff.DesignError, match=r"bad\.toml.*line 2.*length_m"):

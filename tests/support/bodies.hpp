@@ -4,7 +4,9 @@
 #include <utility>
 #include <vector>
 
+#include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/dynamics/flexible_body.hpp"
+#include "freeflex/dynamics/zero_order.hpp"
 #include "freeflex/model/loads.hpp"
 
 namespace freeflex_test {
@@ -47,6 +49,34 @@ inline freeflex::Excitation moment_loads() {
   using freeflex::TimeProfile;
   return freeflex::Excitation{
       {TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt, std::nullopt}};
+}
+
+/// The paper beam (1 m, 1 kg, EI 1, o at the centre) with a torque at o and body-y
+/// thrusters at both tips: the actuators of the control tests.
+inline freeflex::FlexibleBody actuated_beam(int noa) {
+  using T = freeflex::ForceElement::Type;
+  const freeflex::Beam beam(freeflex::BeamProperties::uniform(1.0, 1.0, 1.0));
+  return freeflex::FlexibleBody(beam, noa,
+                                {{"tau", T::Torque, 0.5, {0.0, 0.0}, false},
+                                 {"left", T::Thruster, 0.0, {0.0, 1.0}, false},
+                                 {"right", T::Thruster, 1.0, {0.0, 1.0}, false}});
+}
+
+/// The beam held at rest at a fixed attitude: a time-invariant first-order model.
+class RestTrajectory : public freeflex::RigidTrajectory {
+ public:
+  explicit RestTrajectory(double theta) { s_.pos(2) = theta; }
+  freeflex::RigidState at(const freeflex::Instant&) const override { return s_; }
+  double t_begin() const override { return 0.0; }
+  double t_end() const override { return 0.0; }
+  std::vector<double> breakpoints() const override { return {}; }
+
+ private:
+  freeflex::RigidState s_;
+};
+
+inline freeflex::CommandFunction no_commands() {
+  return [](const freeflex::Instant&, Eigen::Ref<Eigen::VectorXd> c) { c.setZero(); };
 }
 
 }  // namespace freeflex_test

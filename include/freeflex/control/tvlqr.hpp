@@ -8,30 +8,42 @@
 //   −c' = 2 sᵀ g − sᵀ S s,           c(tf) = 0
 // and the optimal law u1 = −K x1 + u_ff with K = R⁻¹ Bᵀ P, u_ff = −R⁻¹ Bᵀ s.
 //
-// Integration (why it is done this way): P, s, c are integrated together by CVODES BDF
-// in reversed time τ = tf − t (where the Riccati flow is stable), with the upper triangle
-// of P as state (n(n+1)/2 entries: symmetry exact by construction, and half the vector
-// work of the full square; it cut the NOA = 6 benchmark from 60 to 49 ms). The Newton
-// systems (I − γJ) of BDF are solved exactly for a closed loop A_cl = A − S P frozen at
-// the last refresh (every 50 steps, after a convergence failure, at each breakpoint), or
-// on request by GMRES preconditioned with that solve: the P block is the shifted
-// Lyapunov equation (A_clᵀ − I/2γ) Z + Z (A_cl − I/2γ) = −R/γ and the s, c blocks follow
-// by block-triangular solves (O(n³) instead of the O(n⁶) dense LU of an
-// n(n+1)/2-dimensional Jacobian: 18 states → 171 + 19 unknowns, 46 → 1081 + 47 for
-// NOA = 20). A_cl is block-diagonalized at each refresh (then a solve is four n x n
-// products and closed-form 2x2 blocks) unless its eigenvector basis is ill-conditioned
-// (κ > modal_max_condition, e.g. P ≈ 0 with the free body's rigid double integrators),
-// when its real Schur form is used (control/lyapunov_solvers.hpp in src/). BDF rather
-// than Adams because the LQR closed loop is stiff (a real pole at −8.6e3 1/s on the
-// paper beam at NOA = 6). The step count (~1000 per second of time-varying model at
-// NOA = 6) is set by the lightly damped closed-loop modes (−7 ± 308i 1/s), which BDF
-// must resolve; it hardly depends on rtol, so the cost is per step: with the vector
-// kernels compiled here (the installed SUNDIALS is unoptimized), the block-diagonal
-// Newton solves and AVX2 products (detail::small_gemm), the NOA = 6 benchmark went from
-// 47 to 15.5 ms (~16 µs per step, about a third of it in the model's A(t), B(t), g(t),
-// 600 of whose ~1600 evaluations are at the output grid) and NOA = 20 from 3.5 to 1.0 s.
-// The model is evaluated at Instant{t, piece_mid} of the pieces between the breakpoints
-// of the nominal motion (plus any given), and the integrator restarts at each of them.
+// Integration (why it is done this way; docs/theory.md §12 and docs/benchmarks.md give
+// the measurements). P, s, c are integrated together in reversed time τ = tf − t, where
+// the Riccati flow is stable, piece by piece between the breakpoints of the model (the
+// nominal motion's, plus any given); the model is evaluated at Instant{t, piece_mid}.
+// The flow is stiff (a real closed-loop pole at −8.6e3 1/s on the paper beam at NOA = 6,
+// −3e5 at NOA = 20) and its linearization, X ↦ A_clᵀ X + X A_cl, has the lightly damped
+// closed-loop modes' sums λi + λj (−14 ± 616i 1/s at NOA = 6, up to ±7740i at NOA = 20).
+//
+// Method::Auto (the default) takes the exponential sweep from 24 states up (NOA >= 9 for a
+// beam with three rigid coordinates), BDF below, where BDF's cheaper steps win.
+//
+// Method::Exponential: exponential collocation. On each step the closed
+// loop A_cl = A − S P is frozen at the predicted midpoint and block-diagonalized
+// (ModalLyapunovSolver, src/control/lyapunov_solvers.hpp); in that basis the linear part
+// of the flow, stiff and oscillatory alike, is integrated exactly by φ-functions, and
+// what it misses (the model's change over the step, the quadratic term) is interpolated
+// at three Gauss nodes found by fixed-point iteration (src/control/riccati_exponential.hpp).
+// The step is then set by how fast those remainders vary, not by the oscillation: 61
+// steps on the NOA = 20 benchmark instead of BDF's 11 904. For the first-order model the
+// sweep runs in its rotating frame (the displacement and velocity of o turned by θ0(t)):
+// the model's A is inertial there and changes with θ0, in the frame only with θ0' and
+// θ0''. A step whose frozen loop has no well-conditioned block-diagonal form (κ₁ >
+// modal_max_condition, e.g. P ≈ 0 with the free body's rigid double integrators) is
+// taken by BDF. The local error of a step (rtol, atol as below) is estimated from the
+// defect of the remainders at its end; the law at the grid times inside a step comes
+// from the same formulas.
+//
+// Method::Bdf: CVODES BDF on the upper triangle of P (n(n+1)/2 entries), s and c, its
+// Newton systems (I − γJ) solved exactly for a closed loop frozen at the last refresh
+// (every 50 steps, after a convergence failure, at each breakpoint): the P block is the
+// shifted Lyapunov equation (A_clᵀ − I/2γ) Z + Z (A_cl − I/2γ) = −R/γ, the s and c blocks
+// follow by block-triangular solves, in the block-diagonal form of the frozen loop or, if
+// its eigenvector basis is ill-conditioned, its real Schur form; or on request by GMRES
+// preconditioned with that solve. BDF of order 3 to 5 is unstable for the lightly damped
+// modes' sums unless h·ω ≲ 0.6, so its step (~1 ms at NOA = 6, 80 µs at NOA = 20) is set
+// by the fastest of them whatever rtol is.
 //
 // K(t) and u_ff(t) are stored on a grid (t0, t0 + h, ..., tf, and every breakpoint) and
 // interpolated linearly; both are continuous in t (B depends on θ0, not on θ0''), so a
@@ -74,25 +86,38 @@ struct TvlqrOptions {
   /// (on its controllable subspace, see CareOptions::restrict_to_controllable).
   std::optional<Eigen::MatrixXd> Qf;
   double grid_step_s = 0.005;  ///< spacing of the stored gains [s], > 0
-  double rtol = 1e-8;          ///< CVODES relative tolerance, > 0
+  /// Exponential: exponential collocation in the frozen closed loop's modal basis (BDF for
+  /// a step without one); Bdf: CVODES BDF throughout (the method before issue 19); Auto:
+  /// Exponential for state_size >= kAutoExponentialStates, else Bdf. See above.
+  enum class Method { Auto, Exponential, Bdf } method = Method::Auto;
+  /// Where Auto switches: on the moment example the exponential sweep takes ~100 steps
+  /// whatever the NOA, BDF ~1000 per second of maneuver at NOA = 6 growing as the highest
+  /// closed-loop frequency (11 904 at NOA = 20), and an exponential step costs ~12 BDF
+  /// steps; measured (instructions) BDF 13% cheaper at NOA = 8 (22 states), the exponential
+  /// sweep 23% cheaper at NOA = 10 (26 states) and 8x at NOA = 20.
+  static constexpr int kAutoExponentialStates = 24;
+  double rtol = 1e-8;          ///< relative tolerance of a step's local error, > 0
   double atol = 1e-10;         ///< absolute tolerance, relative to σ (see above), > 0
   long max_steps = 200000;     ///< per piece, > 0
   std::vector<double> breakpoints;  ///< extra breakpoints (e.g. load profile times) [s]
   bool store_riccati = false;       ///< keep P at every grid time (n² doubles each)
-  /// Newton systems of BDF: Lyapunov = the exact solve for the closed loop frozen at the
+  /// Newton systems of BDF (Method::Bdf and the exponential method's BDF steps):
+  /// Lyapunov = the exact solve for the closed loop frozen at the
   /// last setup (modified Newton, one O(n³) solve per iteration); Gmres = GMRES with that
   /// solve as preconditioner and exact Jacobian products (more work per iteration, kept as
   /// a cross-check).
   enum class NewtonSolver { Lyapunov, Gmres } newton_solver = NewtonSolver::Lyapunov;
-  /// The frozen closed loop is block-diagonalized (~3x cheaper solves) when its
-  /// eigenvector basis has κ₁ <= this, else brought to real Schur form. 0: always the
-  /// Schur form.
+  /// The frozen closed loop is block-diagonalized when its eigenvector basis has κ₁ <=
+  /// this; else BDF's Newton solves use its real Schur form, and the exponential method
+  /// takes that step by BDF. 0: never block-diagonalized (the exponential method then
+  /// runs BDF throughout).
   double modal_max_condition = 1e6;
   /// Optional: called with tf - t each time the backward sweep stores a grid time t
   /// (for progress reports on long solves); must not throw.
   std::function<void(double)> progress;
   /// Optional: the work budget the sweep is charged to (a study's, shared with its
-  /// simulations), n³ units a step for n states (riccati_step_work); spending it ends the
+  /// simulations), n³ units a BDF step for n states (riccati_step_work), 16 n³ an
+  /// exponential one; spending it ends the
   /// solve as IntegrationFailed with the time reached.
   std::shared_ptr<WorkBudget> budget;
 };
@@ -121,11 +146,16 @@ struct TvlqrResult {
   Eigen::MatrixXd Qf;                    ///< the terminal weight used
   std::optional<CareResult> terminal_care;  ///< when Qf was defaulted
 
-  long steps = 0;
+  /// The sweep that ran: Exponential or Bdf (Auto resolved by the state size).
+  TvlqrOptions::Method method = TvlqrOptions::Method::Bdf;
+  long steps = 0;                  ///< accepted steps (exponential and BDF)
   long rhs_evaluations = 0;
-  long linear_iterations = 0;
-  long preconditioner_setups = 0;
-  long modal_setups = 0;  ///< of those, how many used the block-diagonal form
+  long linear_iterations = 0;      ///< GMRES iterations (NewtonSolver::Gmres)
+  long preconditioner_setups = 0;  ///< closed-loop factorizations (per exponential step, per BDF refresh)
+  long modal_setups = 0;           ///< of those, how many gave the block-diagonal form
+  long rejected_steps = 0;         ///< exponential steps retried smaller (error or fixed-point test)
+  long fixed_point_iterations = 0; ///< of the exponential steps' stage values
+  long fallback_steps = 0;         ///< exponential steps taken by BDF (no block-diagonal form)
   double wall_time_s = 0.0;
 
   /// Linear interpolation on the grid, held constant outside [t0, tf].
@@ -157,6 +187,15 @@ struct EnumNames<TvlqrResult::Status> {
       {{TvlqrResult::Status::Solved, "solved"},
        {TvlqrResult::Status::TerminalCareFailed, "terminal_care_failed"},
        {TvlqrResult::Status::IntegrationFailed, "integration_failed"}}};
+};
+
+template <>
+struct EnumNames<TvlqrOptions::Method> {
+  static constexpr const char* what = "TV-LQR method";
+  static constexpr std::array<std::pair<TvlqrOptions::Method, const char*>, 3> names{
+      {{TvlqrOptions::Method::Auto, "auto"},
+       {TvlqrOptions::Method::Exponential, "exponential"},
+       {TvlqrOptions::Method::Bdf, "bdf"}}};
 };
 
 template <>

@@ -206,6 +206,8 @@ struct ControllerStudy {
   /// How the first-order closed loop is integrated (ClosedLoopOptions).
   ClosedLoopMethod closed_loop_first_order_method = ClosedLoopMethod::Cvodes;
   int closed_loop_gauss_steps = ClosedLoopOptions{}.gauss_steps;
+  /// How the TV-LQR's Riccati equation is integrated (TvlqrOptions::method).
+  TvlqrOptions::Method tvlqr_method = TvlqrOptions::Method::Auto;
 };
 
 /// [export]: what the controller study leaves for other tools (README, outputs): files
