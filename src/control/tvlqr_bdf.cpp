@@ -1,5 +1,6 @@
 // The BDF sweep of the TV-LQR (control/tvlqr_sweep.hpp): CVODES on the packed Riccati
 // state piece by piece, and the same integrator for single steps of the exponential sweep.
+#include <algorithm>
 #include <cmath>
 
 #include <cvodes/cvodes.h>
@@ -69,14 +70,26 @@ std::string BdfRiccati::advance(double tau_a, double tau_b, bool restart, const 
                                 const std::function<bool(int)>& out) {
   if (restart) cv_.reinit(tau_a);
   cv_.stop_time(tau_b);
+  const cvodes::Counters base = cv_.counters();  // CVODE's counters run from its last (re)start
   auto add_stats = [&]() {
-    const cvodes::Counters c = cv_.counters();  // since this advance's (re)start
-    steps_ += c.steps;
-    rhs_ += c.rhs_evaluations;
-    lin_ += c.linear_iterations;
+    const cvodes::Counters c = cv_.counters();
+    steps_ += c.steps - base.steps;
+    rhs_ += c.rhs_evaluations - base.rhs_evaluations;
+    lin_ += c.linear_iterations - base.linear_iterations;
   };
   const long dim = cv_.dim();
+  double now = tau_a;
   for (std::size_t k = 0; k < taus.size(); ++k) {
+    // A stop within round-off of where the integrator stands (a grid time the previous step
+    // ended on, up to the rounding of τ): its state is the current one; CVODE would refuse
+    // it as too close (CV_TOO_CLOSE).
+    if (taus[k] - now <= 1e-12 * std::max(1.0, std::abs(taus[k]))) {
+      if (!out(static_cast<int>(k))) {
+        add_stats();
+        return d_.error.empty() ? "recording the law failed at t = " + fmt(d_.tf - now) + " s" : d_.error;
+      }
+      continue;
+    }
     bool by_budget = false;
     const cvodes::Integrator::Advance step = cv_.advance(taus[k], max_steps_, budget_, work_, by_budget);
     if (step.flag == CV_TOO_MUCH_WORK && by_budget) {
@@ -97,6 +110,7 @@ std::string BdfRiccati::advance(double tau_a, double tau_b, bool restart, const 
       add_stats();
       return "the Riccati solution became non-finite at t = " + fmt(d_.tf - step.reached) + " s";
     }
+    now = step.reached;
     if (!out(static_cast<int>(k))) {
       add_stats();
       return d_.error.empty() ? "recording the law failed at t = " + fmt(d_.tf - step.reached) + " s" : d_.error;
