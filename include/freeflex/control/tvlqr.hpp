@@ -30,7 +30,7 @@
 // sweep runs in its rotating frame (the displacement and velocity of o turned by θ0(t)):
 // the model's A is inertial there and changes with θ0, in the frame only with θ0' and
 // θ0''. A step whose frozen loop has no well-conditioned block-diagonal form (κ₁ >
-// modal_max_condition, e.g. P ≈ 0 with the free body's rigid double integrators) is
+// 100 modal_max_condition, e.g. P ≈ 0 with the free body's rigid double integrators) is
 // taken by BDF. The local error of a step (rtol, atol as below) is estimated from the
 // defect of the remainders at its end; the law at the grid times inside a step comes
 // from the same formulas.
@@ -108,9 +108,9 @@ struct TvlqrOptions {
   /// a cross-check).
   enum class NewtonSolver { Lyapunov, Gmres } newton_solver = NewtonSolver::Lyapunov;
   /// The frozen closed loop is block-diagonalized when its eigenvector basis has κ₁ <=
-  /// this; else BDF's Newton solves use its real Schur form, and the exponential method
-  /// takes that step by BDF. 0: never block-diagonalized (the exponential method then
-  /// runs BDF throughout).
+  /// this (BDF's Newton solves; else they use its real Schur form) or <= 100 times this
+  /// (an exponential step; else that step is taken by BDF). 0: never block-diagonalized
+  /// (the exponential method then runs BDF throughout).
   double modal_max_condition = 1e6;
   /// Optional: called with tf - t each time the backward sweep stores a grid time t
   /// (for progress reports on long solves); must not throw.
