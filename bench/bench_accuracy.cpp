@@ -31,16 +31,13 @@
 
 #include "freeflex/dynamics/full_model.hpp"
 #include "freeflex/sim/simulate.hpp"
+#include "tvlqr_case.hpp"
 
 using namespace freeflex;
 
 namespace {
 
-double cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+using freeflex_bench::cpu_seconds;
 
 struct Case {
   FlexibleBody body;

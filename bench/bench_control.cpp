@@ -14,52 +14,24 @@
 #include "freeflex/control/closed_loop.hpp"
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/sim/simulate.hpp"
+#include "tvlqr_case.hpp"
 
 using namespace freeflex;
 
 namespace {
 
-struct Case {
-  FlexibleBody body;
-  Excitation loads;
-  std::shared_ptr<const RigidTrajectory> nominal;
-  std::unique_ptr<FirstOrderModel> model;
-  Eigen::MatrixXd Q, R;
-  TvlqrOptions options;
-};
-
-std::unique_ptr<Case> moment_case(int noa, double rtol) {
-  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
-  auto c = std::make_unique<Case>(Case{
-      FlexibleBody(beam, noa,
-                   {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                    {"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                    {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                    {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}}),
-      Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt,
-                  std::nullopt}},
-      nullptr, nullptr, Eigen::MatrixXd(), Eigen::MatrixXd(), TvlqrOptions{}});
-  SimulationOptions so;
-  so.duration_s = 3.0;
-  so.output_step_s = 0.01;
-  c->nominal = simulate_perturbation(c->body, c->loads, so).nominal;
-  const std::vector<int> inputs{1, 2, 3};
-  c->model = std::make_unique<FirstOrderModel>(c->body, *c->nominal, nominal_element_commands(c->loads, inputs), inputs);
-  c->Q = vibration_weight(c->body, 1.0, 10.0, 1.0);
-  c->R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
-  c->options.rtol = rtol;
-  return c;
-}
 
 void BM_tvlqr(benchmark::State& state) {
   const double rtol = state.range(1) == 0 ? 1e-8 : 1e-6;
-  const auto c = moment_case(static_cast<int>(state.range(0)), rtol);
+  const auto c = freeflex_bench::moment_case(static_cast<int>(state.range(0)));
+  TvlqrOptions options;
+  options.rtol = rtol;
   const TvlqrOptions::Method methods[] = {TvlqrOptions::Method::Auto, TvlqrOptions::Method::Bdf,
                                           TvlqrOptions::Method::Exponential};
-  c->options.method = methods[state.range(2)];
+  options.method = methods[state.range(2)];
   TvlqrResult r;
   for (auto _ : state) {
-    r = solve_tvlqr(*c->model, 0.0, 3.0, c->Q, c->R, c->options);
+    r = solve_tvlqr(*c->model, 0.0, 3.0, c->Q, c->R, options);
     benchmark::DoNotOptimize(r.K.data());
   }
   if (!r.ok()) state.SkipWithError(r.message.c_str());

@@ -17,46 +17,14 @@
 #include "freeflex/control/closed_loop.hpp"
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/sim/simulate.hpp"
+#include "tvlqr_case.hpp"
 
 using namespace freeflex;
 
 namespace {
 
-double cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-struct Case {
-  FlexibleBody body;
-  Excitation loads;
-  std::shared_ptr<const RigidTrajectory> nominal;
-  std::unique_ptr<FirstOrderModel> model;
-  Eigen::MatrixXd Q, R;
-};
-
-std::unique_ptr<Case> moment_case(int noa) {
-  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
-  auto c = std::make_unique<Case>(Case{
-      FlexibleBody(beam, noa,
-                   {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                    {"tau", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false},
-                    {"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                    {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}}),
-      Excitation{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0}), std::nullopt, std::nullopt,
-                  std::nullopt}},
-      nullptr, nullptr, Eigen::MatrixXd(), Eigen::MatrixXd()});
-  SimulationOptions so;
-  so.duration_s = 3.0;
-  so.output_step_s = 0.01;
-  c->nominal = simulate_perturbation(c->body, c->loads, so).nominal;
-  const std::vector<int> inputs{1, 2, 3};
-  c->model = std::make_unique<FirstOrderModel>(c->body, *c->nominal, nominal_element_commands(c->loads, inputs), inputs);
-  c->Q = vibration_weight(c->body, 1.0, 10.0, 1.0);
-  c->R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
-  return c;
-}
+using freeflex_bench::cpu_seconds;
+using freeflex_bench::moment_case;
 
 struct Errors {
   double K = 0, ff = 0, c0 = 0, P0 = 0, s0 = 0;

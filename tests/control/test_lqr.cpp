@@ -244,12 +244,7 @@ TEST_CASE("TV-LQR: scalar Riccati closed form", "[control]") {
   // x' = a x + b u: dp/dτ = 2 a p − (b²/r) p² + q has roots p± and
   // (p − p+)/(p − p−) = (pf − p+)/(pf − p−) exp(−(b²/r)(p+ − p−) τ).
   const double a = 0.7, b = 1.3, q = 2.0, r = 0.5, pf = 3.0, T = 1.5;
-  LtvSystem sys;
-  sys.state_size = 1;
-  sys.input_size = 1;
-  sys.state_space = [&](const Instant&) {
-    return StateSpace{Eigen::MatrixXd::Constant(1, 1, a), Eigen::MatrixXd::Constant(1, 1, b), Eigen::VectorXd::Zero(1)};
-  };
+  const LtvSystem sys = freeflex_test::scalar_system(a, b);
   TvlqrOptions o;
   o.Qf = Eigen::MatrixXd::Constant(1, 1, pf);
   o.rtol = 1e-11;
@@ -281,12 +276,7 @@ TEST_CASE("TV-LQR: scalar Riccati closed form", "[control]") {
 
 TEST_CASE("TV-LQR: a work budget stops the backward sweep with the time reached", "[control][issue20]") {
   const double a = 0.7, b = 1.3, T = 1.5;
-  LtvSystem sys;
-  sys.state_size = 1;
-  sys.input_size = 1;
-  sys.state_space = [&](const Instant&) {
-    return StateSpace{Eigen::MatrixXd::Constant(1, 1, a), Eigen::MatrixXd::Constant(1, 1, b), Eigen::VectorXd::Zero(1)};
-  };
+  const LtvSystem sys = freeflex_test::scalar_system(a, b);
   TvlqrOptions o;
   o.Qf = Eigen::MatrixXd::Constant(1, 1, 3.0);
   o.rtol = 1e-11;

@@ -195,12 +195,7 @@ TEST_CASE("φ-functions of the block operators agree with the matrix exponential
 TEST_CASE("TV-LQR exponential sweep: scalar Riccati closed form", "[control][exponential]") {
   // As in test_lqr.cpp: x' = a x + b u, the closed form of P(τ).
   const double a = 0.7, b = 1.3, q = 2.0, r = 0.5, pf = 3.0, T = 1.5;
-  LtvSystem sys;
-  sys.state_size = 1;
-  sys.input_size = 1;
-  sys.state_space = [&](const Instant&) {
-    return StateSpace{Eigen::MatrixXd::Constant(1, 1, a), Eigen::MatrixXd::Constant(1, 1, b), Eigen::VectorXd::Zero(1)};
-  };
+  const LtvSystem sys = freeflex_test::scalar_system(a, b);
   TvlqrOptions o;
   o.method = Method::Exponential;
   o.Qf = Eigen::MatrixXd::Constant(1, 1, pf);
