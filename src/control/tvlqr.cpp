@@ -159,8 +159,10 @@ TvlqrResult sweep(detail::LtvEvaluator& model, int n, int m, const std::vector<d
   sw.options = &o;
   sw.frame = frame;
   sw.result = &res;
-  const bool exponential = o.method == TvlqrOptions::Method::Exponential ||
-                           (o.method == TvlqrOptions::Method::Auto && n >= TvlqrOptions::kAutoExponentialStates);
+  // modal_max_condition = 0 allows no modal form: the exponential sweep would be BDF throughout
+  const bool exponential = o.modal_max_condition > 0.0 &&
+                           (o.method == TvlqrOptions::Method::Exponential ||
+                            (o.method == TvlqrOptions::Method::Auto && n >= TvlqrOptions::kAutoExponentialStates));
   res.method = exponential ? TvlqrOptions::Method::Exponential : TvlqrOptions::Method::Bdf;
   if (exponential)
     sweep_exponential(sw);

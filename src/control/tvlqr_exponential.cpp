@@ -140,6 +140,8 @@ void sweep_exponential(const Sweep& sw) {
   // at NOA = 40, where no step of the moment example has a well-conditioned form,
   // restarting at every step took 306 285 BDF steps and 506 s)
   bool bdf_live = false;
+  int reject_streak = 0;  // consecutive rejections of the current step
+  constexpr int kMaxRejectStreak = 8;
   auto finish = [&](TvlqrResult::Status st, std::string msg) {
     res.status = st;
     res.message = std::move(msg);
@@ -153,6 +155,9 @@ void sweep_exponential(const Sweep& sw) {
     res.fallback_steps = fallbacks;
   };
 
+  // A model that throws (an LtvSystem's callback) ends the sweep as a failure with the time
+  // reached, as in the BDF sweep, instead of escaping solve_tvlqr.
+  try {
   // the state at tf, in the frame's coordinates
   Eigen::MatrixXd P = res.Qf / d.sigma, GtP, Pg;
   rotate_P(P, sw.tf, false);
@@ -212,15 +217,14 @@ void sweep_exponential(const Sweep& sw) {
       if (outcome == ExponentialRiccati::Outcome::Rejected) {
         ++rejected;
         h = ex.suggested_step();
-        if (!(h > 1e-14 * span))
-          return finish(TvlqrResult::Status::IntegrationFailed,
-                        "exponential step size fell to " + fmt(h) + " s at t = " + fmt(sw.tf - tau) +
-                            " s: " + ex.reject_reason());
-        continue;
+        // Rejected again and again (an error estimate at a round-off floor, with a form near
+        // the condition bound): this step by BDF below rather than steps shrinking to nothing.
+        if (++reject_streak < kMaxRejectStreak && h > 1e-14 * span) continue;
       }
       if (outcome == ExponentialRiccati::Outcome::Accepted) {
         ++accepted;
         bdf_live = false;
+        reject_streak = 0;
         for (std::size_t k = 0; k < which.size(); ++k) {
           const int i = which[k];
           if (!d.eval(sw.grid[i])) return finish(TvlqrResult::Status::IntegrationFailed, d.error);
@@ -234,7 +238,8 @@ void sweep_exponential(const Sweep& sw) {
         h = ex.suggested_step();
         continue;
       }
-      // NoForm: this step by BDF, from the current state
+      // NoForm (or rejected kMaxRejectStreak times): this step by BDF, from the current state
+      reject_streak = 0;
       ++fallbacks;
       Eigen::VectorXd y(nt + n + 1);
       pack(ex.P(), y.data());
@@ -276,7 +281,14 @@ void sweep_exponential(const Sweep& sw) {
     s = ex.s();
     c = ex.c();
   }
+  if (idx >= 0)  // every grid time must have its gain (a piece ended without its last step)
+    return finish(TvlqrResult::Status::IntegrationFailed,
+                  "the exponential sweep left the gains before t = " + fmt(sw.grid[idx]) + " s unset");
   finish(TvlqrResult::Status::Solved, "solved");
+  } catch (const std::exception& e) {
+    finish(TvlqrResult::Status::IntegrationFailed,
+           "the model failed near t = " + fmt(sw.tf - ex.tau()) + " s (exponential sweep): " + e.what());
+  }
 }
 
 }  // namespace freeflex::detail

@@ -25,7 +25,7 @@
 // of the flow, stiff and oscillatory alike, is integrated exactly by φ-functions, and
 // what it misses (the model's change over the step, the quadratic term) is interpolated
 // at three Gauss nodes found by fixed-point iteration (src/control/riccati_exponential.hpp).
-// The step is then set by how fast those remainders vary, not by the oscillation: 61
+// The step is then set by how fast those remainders vary, not by the oscillation: 75
 // steps on the NOA = 20 benchmark instead of BDF's 11 904. For the first-order model the
 // sweep runs in its rotating frame (the displacement and velocity of o turned by θ0(t)):
 // the model's A is inertial there and changes with θ0, in the frame only with θ0' and
@@ -98,7 +98,7 @@ struct TvlqrOptions {
   static constexpr int kAutoExponentialStates = 24;
   double rtol = 1e-8;          ///< relative tolerance of a step's local error, > 0
   double atol = 1e-10;         ///< absolute tolerance, relative to σ (see above), > 0
-  long max_steps = 200000;     ///< per piece, > 0
+  long max_steps = 200000;     ///< > 0: BDF steps per CVODE call (between stored grid times); exponential steps per piece
   std::vector<double> breakpoints;  ///< extra breakpoints (e.g. load profile times) [s]
   bool store_riccati = false;       ///< keep P at every grid time (n² doubles each)
   /// Newton systems of BDF (Method::Bdf and the exponential method's BDF steps):
