@@ -120,12 +120,30 @@ PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotO
     if (panels > 1) gp << "set title " << quoted(p.title) << "\n";
     gp << (p.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '% h'\n");
     gp << "set xlabel " << quoted(p.xlabel) << "\nset ylabel " << quoted(p.ylabel) << "\n";
-    if (!p.hlines.empty()) {
+    // Series that set the y range: all, unless some of them do not (then the others).
+    std::vector<const PlotSeries*> ranging;
+    for (const auto& s : p.series)
+      if (s.sets_range) ranging.push_back(&s);
+    const bool some_left_out = !ranging.empty() && ranging.size() < p.series.size();
+    if (ranging.empty())
+      for (const auto& s : p.series) ranging.push_back(&s);
+    if (p.log_y && some_left_out) {
+      // the positive values of the ranging series, with a factor of 2 as margin
+      gp << "set autoscale y\nstats_lo = 1e300\nstats_hi = 0\n";
+      for (const PlotSeries* s : ranging)
+        gp << "stats " << quoted(s->data_file) << " skip 1 using (column(" << s->y_column << ") > 0 ? column("
+           << s->y_column << ") : NaN) nooutput\nstats_lo = (STATS_min < stats_lo) ? STATS_min : stats_lo\n"
+              "stats_hi = (STATS_max > stats_hi) ? STATS_max : stats_hi\n";
+      gp << "set yrange [stats_lo / 2 : stats_hi * 2]\n";
+    } else if (!p.hlines.empty() || some_left_out) {
       // the data's range and the lines', with 10% of the larger span as margin
-      gp << "set autoscale y\nstats_lo = " << std::min(0.0, *std::min_element(p.hlines.begin(), p.hlines.end()))
-         << "\nstats_hi = " << std::max(0.0, *std::max_element(p.hlines.begin(), p.hlines.end())) << "\n";
-      for (const auto& s : p.series)
-        gp << "stats " << quoted(s.data_file) << " skip 1 using " << s.y_column
+      if (p.hlines.empty())
+        gp << "set autoscale y\nstats_lo = 1e300\nstats_hi = -1e300\n";
+      else
+        gp << "set autoscale y\nstats_lo = " << std::min(0.0, *std::min_element(p.hlines.begin(), p.hlines.end()))
+           << "\nstats_hi = " << std::max(0.0, *std::max_element(p.hlines.begin(), p.hlines.end())) << "\n";
+      for (const PlotSeries* s : ranging)
+        gp << "stats " << quoted(s->data_file) << " skip 1 using " << s->y_column
            << " nooutput\nstats_lo = (STATS_min < stats_lo) ? STATS_min : stats_lo\n"
               "stats_hi = (STATS_max > stats_hi) ? STATS_max : stats_hi\n";
       gp << "stats_pad = 0.1 * (stats_hi - stats_lo + 1e-12)\nset yrange [stats_lo - stats_pad : stats_hi + stats_pad]\n";
@@ -140,7 +158,7 @@ PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotO
       gp << ", \\\n     " << p.hlines[i] << " with lines dt 3 lw 1.5 lc rgb 'black' title "
          << quoted(i == 0 ? p.hline_title : "");
     gp << "\n";
-    if (!p.hlines.empty()) gp << "set autoscale y\n";
+    if (!p.hlines.empty() || some_left_out) gp << "set autoscale y\n";
   }
   if (panels > 1) gp << "unset multiplot\n";
   write_file_atomic(dir + "/" + spec.name + ".gp", gp.str());

@@ -166,6 +166,37 @@ TEST_CASE("a vibration-aware suppression draws the commands of both nominals", "
   CHECK(r.output.find("not drawn") == std::string::npos);
 }
 
+TEST_CASE("a run that stopped out of range is drawn as far as it went, and its key says so", "[cli][figures]") {
+  // the stiffened full model leaves its range at 0.038 s: its stub was labelled as if it
+  // had completed, and vibration.png left it out without a word
+  const std::string out = temp_path("stopped_run");
+  const CliResult r = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) +
+                              "/designs/paper_moment_pulse_stiffening.toml --out " + out + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 1);  // out of range: documented
+  const std::string stopped = "full nonlinear (stopped at 0.038 s: out of range)";
+  const std::string vib = read(out + "/vibration.gp");
+  CHECK_THAT(vib, Contains("'nonlinear.csv' skip 1 using 1:22 with lines lw 2 title '" + stopped + "'"));
+  CHECK_THAT(read(out + "/generalized_displacements.gp"), Contains(stopped));
+  CHECK_THAT(read(out + "/rigid_rotation.gp"), Contains(stopped));
+  CHECK_THAT(read(out + "/tip_deflection.gp"),
+             Contains("title 'full nonlinear (stiffening; stopped at 0.038 s: out of range)'"));
+  CHECK(vib.find("title 'full nonlinear'") == std::string::npos);
+
+  // the spin-up's comparison without stiffening diverges: named so, and the y range is the
+  // completed runs' (its -9 m flattened their -0.4 m)
+  const std::string krb = temp_path("stopped_krb");
+  const CliResult k =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/spinup_krb.toml --out " + krb + " --quiet");
+  INFO(k.output);
+  REQUIRE(k.exit_code == 0);
+  const std::string tips = read(krb + "/tip_deflection.gp");
+  CHECK_THAT(tips, Contains("title 'full nonlinear (no stiffening; stopped at 13.38 s: out of range)'"));
+  CHECK_THAT(tips, Contains("stats 'nonlinear.csv'"));
+  CHECK(tips.find("stats 'nonlinear_stiffening_off.csv'") == std::string::npos);
+  CHECK_THAT(tips, Contains("set yrange [stats_lo"));
+}
+
 TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {
   const std::string design = write_temp("unreachable",
                                         "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n"

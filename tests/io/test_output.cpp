@@ -86,3 +86,32 @@ TEST_CASE("a long figure title is broken into lines the figure's width holds", "
                            std::string(112, 'x') + "...'"));
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("a series that does not set the y range is left out of it, not of the plot", "[io][figures]") {
+  // a run that stopped out of range: its last values flattened the completed runs' curves
+  const std::string dir = freeflex_test::temp_path("plot_range");
+  std::filesystem::create_directories(dir);
+  PlotSpec spec;
+  spec.name = "r";
+  spec.panels.push_back({"tip", "t [s]", "w [m]", {{"good.csv", 1, 2, "completed", "lines"}}});
+  PlotSeries stopped{"stopped.csv", 1, 2, "stopped (stopped at 1 s: out of range)", "lines dt 2"};
+  stopped.sets_range = false;
+  spec.panels[0].series.push_back(stopped);
+  spec.panels.push_back(spec.panels[0]);
+  spec.panels[1].log_y = true;
+  PlotOptions no_gnuplot;
+  no_gnuplot.gnuplot = "";
+  render_plot(spec, dir, no_gnuplot);
+  const std::string gp = freeflex_test::read_text(dir + "/r.gp");
+  CHECK_THAT(gp, Contains("stats 'good.csv' skip 1 using 2 nooutput"));
+  CHECK_THAT(gp, Contains("stats 'good.csv' skip 1 using (column(2) > 0 ? column(2) : NaN) nooutput"));
+  CHECK(gp.find("stats 'stopped.csv'") == std::string::npos);
+  CHECK_THAT(gp, Contains("set yrange [stats_lo - stats_pad : stats_hi + stats_pad]"));
+  CHECK_THAT(gp, Contains("'stopped.csv' skip 1 using 1:2 with lines dt 2 lw 2"));
+  // every series setting the range (or none): gnuplot's own autoscale, no stats
+  spec.panels[0].series[1].sets_range = true;
+  spec.panels[1].series[0].sets_range = false;
+  render_plot(spec, dir, no_gnuplot);
+  CHECK(freeflex_test::read_text(dir + "/r.gp").find("stats ") == std::string::npos);
+  std::filesystem::remove_all(dir);
+}

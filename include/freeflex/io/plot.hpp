@@ -19,6 +19,10 @@ struct PlotSeries {
   int y_column = 2;       ///< 1-based
   std::string title;
   std::string style = "lines";  ///< gnuplot style: "lines", "points", "linespoints", "lines dt 2" ...
+  /// false: the series does not set the y range when another series of its panel does
+  /// (a run that stopped out of range, whose last values would flatten the others); it is
+  /// drawn clipped at the axes.
+  bool sets_range = true;
 };
 
 struct PlotPanel {
