@@ -4,6 +4,8 @@
 #include <algorithm>
 
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include <fcntl.h>
@@ -195,6 +197,66 @@ TEST_CASE("a run that stopped out of range is drawn as far as it went, and its k
   CHECK_THAT(tips, Contains("stats 'nonlinear.csv'"));
   CHECK(tips.find("stats 'nonlinear_stiffening_off.csv'") == std::string::npos);
   CHECK_THAT(tips, Contains("set yrange [stats_lo"));
+}
+
+TEST_CASE("every case of a suppression keeps one colour of its own, the model told by the dash", "[cli][figures]") {
+  // 6 cases x 2 models on gnuplot's cycle of 8 colours: pairs of cases looked the same
+  const std::string out = temp_path("rotation_at_rest_colours");
+  const CliResult r = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) +
+                              "/designs/suppress_rotation_at_rest.toml --out " + out + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  // series lines: 'case_NAME_MODEL.csv' ... with lines [dt 2] lw 2 lc rgb '#rrggbb' title ...
+  struct Drawn {
+    std::string file, dash, colour;
+  };
+  auto series = [&](const std::string& gp) {
+    std::vector<std::vector<Drawn>> panels;
+    std::istringstream in(gp);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("plot ", 0) == 0) panels.emplace_back();
+      const auto q = line.find('\''), with = line.find(" with "), lc = line.find("lc rgb '");
+      if (panels.empty() || q == std::string::npos || with == std::string::npos || line.find(" skip 1") == std::string::npos)
+        continue;
+      Drawn d;
+      d.file = line.substr(q + 1, line.find('\'', q + 1) - q - 1);
+      d.dash = line.find(" dt ", with) != std::string::npos ? line.substr(line.find(" dt ", with), 6) : "";
+      d.colour = lc == std::string::npos ? "" : line.substr(lc + 8, 7);
+      panels.back().push_back(d);
+    }
+    return panels;
+  };
+  const auto figure = series(read(out + "/comparison.gp"));
+  REQUIRE(figure.size() == 2);
+  std::map<std::string, std::string> colour_of;  // case -> colour
+  for (const auto& panel : figure) {
+    REQUIRE(panel.size() == 12);
+    std::set<std::pair<std::string, std::string>> looks;
+    for (const auto& d : panel) {
+      REQUIRE(d.colour.size() == 7);
+      looks.insert({d.colour, d.dash});
+      const bool first_order = d.file.find("_first_order.csv") != std::string::npos;
+      CHECK(d.dash == (first_order ? " dt 2 " : ""));
+      const std::string name = d.file.substr(5, d.file.rfind(first_order ? "_first_order" : "_nonlinear") - 5);
+      if (!colour_of.count(name)) colour_of[name] = d.colour;
+      CHECK(colour_of[name] == d.colour);  // the same case, the same colour: in both models and panels
+    }
+    CHECK(looks.size() == 12);  // no two series look alike
+  }
+  std::set<std::string> colours;
+  for (const auto& [name, c] : colour_of) colours.insert(c);
+  CHECK(colour_of.size() == 6);
+  CHECK(colours.size() == 6);  // each case its own
+  for (const auto& panel : series(read(out + "/comparison_commands.gp")))
+    for (const auto& d : panel) {
+      const std::string name = d.file.substr(9, d.file.rfind("_nonlinear") - 9);  // commands_NAME_nonlinear.csv
+      CHECK(colour_of[name] == d.colour);
+    }
+  // one pair of margins for all panels (set before the panels): their time axes line up
+  const std::string gp = read(out + "/comparison.gp");
+  CHECK(gp.find("set lmargin ") < gp.find("set multiplot"));
+  CHECK(gp.find("set rmargin ") < gp.find("set multiplot"));
 }
 
 TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {

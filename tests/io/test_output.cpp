@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -113,5 +114,30 @@ TEST_CASE("a series that does not set the y range is left out of it, not of the 
   spec.panels[1].series[0].sets_range = false;
   render_plot(spec, dir, no_gnuplot);
   CHECK(freeflex_test::read_text(dir + "/r.gp").find("stats ") == std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("figures have 12 distinct series colours and panels that share their margins", "[io][figures]") {
+  std::set<std::string> colours;
+  for (std::size_t i = 0; i < kSeriesColors; ++i) colours.insert(series_color(i));
+  CHECK(colours.size() == 12);
+  CHECK(kSeriesColors >= 12);
+  CHECK(series_color(kSeriesColors) == series_color(0));
+  const std::string dir = freeflex_test::temp_path("plot_colours");
+  std::filesystem::create_directories(dir);
+  PlotSpec spec;
+  spec.name = "c";
+  spec.panels.push_back({"a", "t [s]", "y", {{"a.csv", 1, 2, "short", "lines", true, series_color(3)}}});
+  spec.panels.push_back({"b", "t [s]", "y", {{"b.csv", 1, 2, std::string(100, 'k'), "lines dt 2"}}});
+  PlotOptions no_gnuplot;
+  no_gnuplot.gnuplot = "";
+  render_plot(spec, dir, no_gnuplot);
+  const std::string gp = freeflex_test::read_text(dir + "/c.gp");
+  CHECK_THAT(gp, Contains("using 1:2 with lines lw 2 lc rgb '" + series_color(3) + "' title 'short'"));
+  CHECK_THAT(gp, Contains("using 1:2 with lines dt 2 lw 2 title '"));  // no colour: gnuplot's cycle
+  // one left and one right margin for both panels, the right one holding the widest key
+  CHECK(gp.find("set lmargin 12\nset rmargin 98\n") < gp.find("set multiplot"));
+  CHECK(gp.find("set lmargin", gp.find("set multiplot")) == std::string::npos);
+  CHECK_THAT(gp, Contains("set terminal pngcairo size 1360,"));  // widened: the plots keep 480 px
   std::filesystem::remove_all(dir);
 }

@@ -23,7 +23,15 @@ struct PlotSeries {
   /// (a run that stopped out of range, whose last values would flatten the others); it is
   /// drawn clipped at the axes.
   bool sets_range = true;
+  /// gnuplot colour ("#rrggbb", see series_color); "": gnuplot's own cycle of 8
+  std::string color{};
 };
+
+/// Colours told apart in a figure: series_color(i) for i < kSeriesColors are distinct
+/// (then they repeat). Give each case of a figure its own index and use it in every panel
+/// and figure that shows the case, so that a case keeps its colour.
+inline constexpr std::size_t kSeriesColors = 12;
+std::string series_color(std::size_t index);
 
 struct PlotPanel {
   std::string title, xlabel, ylabel;
@@ -36,11 +44,14 @@ struct PlotPanel {
   std::string hline_title = "limit";
 };
 
+/// Panels share their left and right margins (the key's column, as wide as the widest
+/// key of the figure), so that their x axes line up; the figure is widened when the keys
+/// would leave its plots narrower than about half of it.
 struct PlotSpec {
   std::string name;   ///< file stem: NAME.gp and NAME.png
   std::string title;  ///< figure title (above all panels)
   std::vector<PlotPanel> panels;  ///< stacked vertically
-  int width_px = 900;
+  int width_px = 900;  ///< at least: widened for wide keys
   int height_px = 0;  ///< 0: 300 px per panel plus a header
 };
 
