@@ -259,6 +259,31 @@ TEST_CASE("every case of a suppression keeps one colour of its own, the model to
   CHECK(gp.find("set rmargin ") < gp.find("set multiplot"));
 }
 
+TEST_CASE("the maneuver's figures say which optimum they draw", "[cli][figures]") {
+  // they were titled "Actuator commands: <design title>" (claiming the design's LQG or
+  // bang-bang content) and "Optimized rigid maneuver" also for a vibration-aware optimum
+  const std::string rigid = temp_path("titles_min_time");
+  const CliResult r =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/slew_min_time.toml --out " + rigid + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(read(rigid + "/maneuver_controls.gp"),
+             Contains("title 'Optimized commands (rigid-body optimum; objective: time + command rate) \u2014 Minimum-time"));
+  CHECK_THAT(read(rigid + "/maneuver_states.gp"),
+             Contains("title 'Optimized maneuver''s rigid-body motion (rigid-body optimum; objective: time + command rate)"));
+  const std::string aware = temp_path("titles_at_rest");
+  const CliResult a = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) +
+                              "/designs/suppress_rotation_at_rest.toml --out " + aware + " --quiet");
+  INFO(a.output);
+  REQUIRE(a.exit_code == 0);
+  for (const char* f : {"/maneuver_controls.gp", "/maneuver_states.gp"}) {
+    const std::string gp = read(aware + f);
+    CHECK_THAT(gp, Contains("(vibration-aware optimum: 4 elastic modes, all at rest; objective:"));
+    CHECK(gp.find("rigid maneuver") == std::string::npos);
+    CHECK(gp.find("Actuator commands") == std::string::npos);
+  }
+}
+
 TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {
   const std::string design = write_temp("unreachable",
                                         "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n"
