@@ -154,6 +154,7 @@ PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotO
     if (panels > 1) gp << "set title " << quoted(p.title) << "\n";
     gp << (p.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '% h'\n");
     gp << "set xlabel " << quoted(p.xlabel) << "\nset ylabel " << quoted(p.ylabel) << "\n";
+    gp << (p.x_to_data ? "set autoscale xfix\n" : "set autoscale x\n");
     // Series that set the y range: all, unless some of them do not (then the others).
     std::vector<const PlotSeries*> ranging;
     for (const auto& s : p.series)

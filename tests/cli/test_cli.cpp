@@ -271,6 +271,8 @@ TEST_CASE("the maneuver's figures say which optimum they draw", "[cli][figures]"
              Contains("title 'Optimized commands (rigid-body optimum; objective: time + command rate) \u2014 Minimum-time"));
   CHECK_THAT(read(rigid + "/maneuver_states.gp"),
              Contains("title 'Optimized maneuver''s rigid-body motion (rigid-body optimum; objective: time + command rate)"));
+  // the time axis ends at the maneuver's end, the limit lines run its whole width
+  CHECK_THAT(read(rigid + "/maneuver_controls.gp"), Contains("set autoscale xfix\n"));
   const std::string aware = temp_path("titles_at_rest");
   const CliResult a = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) +
                               "/designs/suppress_rotation_at_rest.toml --out " + aware + " --quiet");

@@ -141,3 +141,25 @@ TEST_CASE("figures have 12 distinct series colours and panels that share their m
   CHECK_THAT(gp, Contains("set terminal pngcairo size 1360,"));  // widened: the plots keep 480 px
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("a time axis ends at the data, so that limit lines run its whole width", "[io][figures]") {
+  // the axis ran to the next tic beyond the data (2.17 s: to 2.2) and the limits stopped short
+  const std::string dir = freeflex_test::temp_path("plot_xfix");
+  std::filesystem::create_directories(dir);
+  PlotSpec spec;
+  spec.name = "x";
+  spec.panels.push_back({"commands", "t [s]", "u", {{"u.csv", 1, 2, "u", "lines"}}});
+  spec.panels[0].hlines = {-1.0, 1.0};
+  spec.panels.push_back({"histogram", "E", "samples", {{"h.csv", 1, 2, "samples", "boxes"}}});
+  spec.panels[1].x_to_data = false;
+  PlotOptions no_gnuplot;
+  no_gnuplot.gnuplot = "";
+  render_plot(spec, dir, no_gnuplot);
+  const std::string gp = freeflex_test::read_text(dir + "/x.gp");
+  const auto second = gp.find("set title 'histogram'");
+  REQUIRE(second != std::string::npos);
+  CHECK(gp.find("set autoscale xfix\n") < second);
+  CHECK(gp.find("set autoscale x\n", second) != std::string::npos);
+  CHECK(gp.find("set autoscale xfix\n", second) == std::string::npos);
+  std::filesystem::remove_all(dir);
+}

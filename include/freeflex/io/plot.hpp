@@ -42,6 +42,10 @@ struct PlotPanel {
   /// that a command at its limit is not clipped by the axis.
   std::vector<double> hlines{};
   std::string hline_title = "limit";
+  /// The x axis ends at the data's first and last x (gnuplot's `autoscale xfix`), not at
+  /// the next tic beyond them: a time axis, along which the limit lines then run the whole
+  /// width. false for boxes (a histogram's outer bars would be cut in half).
+  bool x_to_data = true;
 };
 
 /// Panels share their left and right margins (the key's column, as wide as the widest
