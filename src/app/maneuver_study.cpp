@@ -151,8 +151,10 @@ void write_maneuver(const Design& design, const ManeuverStudyResult& r, RunOutpu
   const std::string kind = maneuver_kind(st.problem);
   PlotSpec states{"maneuver_states", "Optimized maneuver's rigid-body motion (" + kind + ") — " + design.title, {}};
   const char* names[3] = {"R_x [m]", "R_y [m]", "theta [rad]"};
+  // the coordinates that move, as the simulation's figures (theta if none does)
   for (int c = 0; c < 3; ++c)
-    states.panels.push_back({names[c], "t [s]", names[c], {{"trajectory.csv", 1, 2 + c, "optimized", "lines"}}});
+    if (moves(data.col(1 + c)) || (c == 2 && states.panels.empty()))
+      states.panels.push_back({names[c], "t [s]", names[c], {{"trajectory.csv", 1, 2 + c, "optimized", "lines"}}});
   out.plot(states, design.plots);
   PlotSpec controls{"maneuver_controls", "Optimized commands (" + kind + ") — " + design.title,
                     {{"commands", "t [s]", "u [N or N m]", {}}}};

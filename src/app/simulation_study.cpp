@@ -453,10 +453,8 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
   // Figures in the manner of the paper's Figs. 4-7: both solutions overlaid.
   if (nl_ok || pt_ok) {
     const Eigen::MatrixXd& any = nl_ok ? r.nonlinear->run.z : r.perturbation->run.z;
-    auto moves = [&](int c) {
-      double m = any.col(c).cwiseAbs().maxCoeff();
-      if (nl_ok && pt_ok) m = std::max(m, r.perturbation->run.z.col(c).cwiseAbs().maxCoeff());
-      return m > 1e-9;
+    auto moves = [&](int c) {  // in either run
+      return detail::moves(any.col(c)) || (nl_ok && pt_ok && detail::moves(r.perturbation->run.z.col(c)));
     };
     auto series = [&](int col, const std::string& what) {
       std::vector<PlotSeries> s;

@@ -259,7 +259,7 @@ TEST_CASE("every case of a suppression keeps one colour of its own, the model to
   CHECK(gp.find("set rmargin ") < gp.find("set multiplot"));
 }
 
-TEST_CASE("the maneuver's figures say which optimum they draw", "[cli][figures]") {
+TEST_CASE("the maneuver's figures say which optimum they draw, and skip coordinates that never move", "[cli][figures]") {
   // they were titled "Actuator commands: <design title>" (claiming the design's LQG or
   // bang-bang content) and "Optimized rigid maneuver" also for a vibration-aware optimum
   const std::string rigid = temp_path("titles_min_time");
@@ -284,6 +284,13 @@ TEST_CASE("the maneuver's figures say which optimum they draw", "[cli][figures]"
     CHECK(gp.find("rigid maneuver") == std::string::npos);
     CHECK(gp.find("Actuator commands") == std::string::npos);
   }
+  // a pure rotation: no flat R_x, R_y panels at zero (as the simulation's figures)
+  const std::string states = read(aware + "/maneuver_states.gp");
+  CHECK(states.find("R_x") == std::string::npos);
+  CHECK(states.find("R_y") == std::string::npos);
+  CHECK_THAT(states, Contains("set ylabel 'theta [rad]'"));
+  for (const char* c : {"set ylabel 'R_x [m]'", "set ylabel 'R_y [m]'", "set ylabel 'theta [rad]'"})
+    CHECK_THAT(read(rigid + "/maneuver_states.gp"), Contains(c));  // a slew moves all three
 }
 
 TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {
