@@ -391,6 +391,10 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
 namespace detail {
 namespace {
 
+/// An end whose deflection peaks below this fraction of the other end's is not drawn in
+/// vibration.png (it is a clamped root: its ±1e-19 is round-off).
+constexpr double kNegligibleEnd = 1e-12;
+
 /// "" for a run that completed; for one that stopped, "stopped at T s: out of range", T
 /// the last time it reached.
 std::string stopped_note(const SimulationStudyResult::Solution& s) {
@@ -483,6 +487,7 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
                   {"tip deflection, right end", "t [s]", "w(right) [m]", {}},
                   {"vibration energy (log scale)", "t [s]", "E_vib [J]", {}, true}}};
     std::string energy_note;
+    double peak_left = 0.0, peak_right = 0.0;  // of the runs drawn
     for (const auto* sol : {&r.nonlinear, &r.perturbation}) {
       if (!*sol || !(*sol)->table.size()) continue;  // a run that stopped: what it computed, named so
       const std::vector<std::string>& header = (*sol)->header;
@@ -498,6 +503,8 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
       vib.panels[0].series.push_back(run_series(**sol, file, tl, label, style));
       vib.panels[1].series.push_back(run_series(**sol, file, tl + 1, label, style));
       vib.panels[2].series.push_back(run_series(**sol, file, energy, label, style));
+      peak_left = std::max(peak_left, (*sol)->table.col(tl - 1).cwiseAbs().maxCoeff());
+      peak_right = std::max(peak_right, (*sol)->table.col(tl).cwiseAbs().maxCoeff());
       if (!(*sol)->run.ok()) continue;  // no end to tell: its key says where it stopped
       std::ostringstream note;
       note << (energy_note.empty() ? "; at the end: " : ", ") << label << " " << std::setprecision(3)
@@ -505,6 +512,12 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
       energy_note += note.str();
     }
     vib.panels[2].title += energy_note;
+    // an end that does not deflect (clamped at o: a cantilever's root) would be a panel of
+    // round-off: left out when its deflection is negligible beside the other end's
+    if (peak_left < kNegligibleEnd * peak_right)
+      vib.panels.erase(vib.panels.begin());
+    else if (peak_right < kNegligibleEnd * peak_left)
+      vib.panels.erase(vib.panels.begin() + 1);
     out.plot(vib, design.plots);
   }
 }

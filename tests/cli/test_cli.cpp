@@ -293,6 +293,28 @@ TEST_CASE("the maneuver's figures say which optimum they draw, and skip coordina
     CHECK_THAT(read(rigid + "/maneuver_states.gp"), Contains(c));  // a slew moves all three
 }
 
+TEST_CASE("vibration.png leaves out an end that does not deflect", "[cli][figures]") {
+  // the spin-up's cantilever is clamped at its left end (o at the root): that panel drew
+  // +-1e-19 of round-off
+  const std::string krb = temp_path("clamped_end");
+  const CliResult k =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/spinup_krb.toml --out " + krb + " --quiet");
+  INFO(k.output);
+  REQUIRE(k.exit_code == 0);
+  const std::string vib = read(krb + "/vibration.gp");
+  CHECK(vib.find("left end") == std::string::npos);
+  CHECK_THAT(vib, Contains("set title 'tip deflection, right end'"));
+  CHECK_THAT(vib, Contains("set multiplot layout 2,1"));
+  // a free-free beam: both ends
+  const std::string free = temp_path("free_ends");
+  const CliResult f =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_force_pulse.toml --out " + free + " --quiet");
+  REQUIRE(f.exit_code == 0);
+  const std::string both = read(free + "/vibration.gp");
+  CHECK_THAT(both, Contains("set title 'tip deflection, left end'"));
+  CHECK_THAT(both, Contains("set title 'tip deflection, right end'"));
+}
+
 TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {
   const std::string design = write_temp("unreachable",
                                         "[beam]\nlength_m = 1.0\nmass_kg = 1.0\nbending_stiffness_Nm2 = 1.0\n"
