@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <iomanip>
+#include <sstream>
 
 #include "app/study_files.hpp"
 #include "freeflex/io/plot.hpp"
@@ -18,6 +19,34 @@ std::string ipopt_output_file(const TrajoptOptions& options) {
   for (const auto& [key, value] : options.ipopt_options)
     if (key == "output_file") return value;
   return "";
+}
+
+/// What the optimized maneuver is, for its figures' titles: "rigid-body optimum" or
+/// "vibration-aware optimum: 4 elastic modes, all at rest", then "; objective: ..." (the
+/// terms of the objective with a weight).
+std::string maneuver_kind(const ManeuverProblem& p) {
+  std::ostringstream os;
+  if (p.elastic) {
+    os << "vibration-aware optimum: ";
+    if (p.elastic_modes > 0)
+      os << p.elastic_modes << " elastic mode" << (p.elastic_modes == 1 ? "" : "s");
+    else
+      os << "first-order elastic model";
+    if (p.modes_at_rest == ManeuverProblem::all_modes)
+      os << ", all at rest";
+    else if (p.modes_at_rest > 0)
+      os << ", first " << p.modes_at_rest << " at rest";
+    if (std::isfinite(p.tip_deflection_limit_m)) os << ", tip deflection <= " << p.tip_deflection_limit_m << " m";
+  } else {
+    os << "rigid-body optimum";
+  }
+  std::vector<std::string> terms;
+  if (p.w_time > 0) terms.push_back("time");
+  if (p.w_energy > 0) terms.push_back("command energy");
+  if (p.w_smooth > 0) terms.push_back("command rate");
+  if (p.elastic && p.w_vibration > 0) terms.push_back("residual vibration");
+  for (std::size_t i = 0; i < terms.size(); ++i) os << (i ? " + " : "; objective: ") << terms[i];
+  return os.str();
 }
 
 }  // namespace
@@ -117,12 +146,18 @@ void write_maneuver(const Design& design, const ManeuverStudyResult& r, RunOutpu
     data.row(i).tail(nu) = k >= 0 ? t.u.row(k) : t.u_mid.row(-1 - k);
   }
   out.csv("trajectory.csv", header, data);
-  PlotSpec states{"maneuver_states", "Optimized rigid maneuver: " + design.title, {}};
+  // what is drawn: the optimum's rigid-body motion and commands (not the flown or
+  // controlled response), and which optimum it is
+  const std::string kind = maneuver_kind(st.problem);
+  PlotSpec states{"maneuver_states", "Optimized maneuver's rigid-body motion (" + kind + ") — " + design.title, {}};
   const char* names[3] = {"R_x [m]", "R_y [m]", "theta [rad]"};
+  // the coordinates that move, as the simulation's figures (theta if none does)
   for (int c = 0; c < 3; ++c)
-    states.panels.push_back({names[c], "t [s]", names[c], {{"trajectory.csv", 1, 2 + c, "optimized", "lines"}}});
+    if (moves(data.col(1 + c)) || (c == 2 && states.panels.empty()))
+      states.panels.push_back({names[c], "t [s]", names[c], {{"trajectory.csv", 1, 2 + c, "optimized", "lines"}}});
   out.plot(states, design.plots);
-  PlotSpec controls{"maneuver_controls", "Actuator commands: " + design.title, {{"commands", "t [s]", "u [N or N m]", {}}}};
+  PlotSpec controls{"maneuver_controls", "Optimized commands (" + kind + ") — " + design.title,
+                    {{"commands", "t [s]", "u [N or N m]", {}}}};
   for (int a = 0; a < nu; ++a)
     controls.panels[0].series.push_back({"trajectory.csv", 1, 8 + a, st.actuator_names[a], "linespoints pt 7 ps 0.4"});
   // the bounds the optimizer was given, so that a command at its limit shows as one

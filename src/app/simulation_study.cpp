@@ -389,6 +389,41 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
 }
 
 namespace detail {
+namespace {
+
+/// An end whose deflection peaks below this fraction of the other end's is not drawn in
+/// vibration.png (it is a clamped root: its ±1e-19 is round-off).
+constexpr double kNegligibleEnd = 1e-12;
+
+/// "" for a run that completed; for one that stopped, "stopped at T s: out of range", T
+/// the last time it reached.
+std::string stopped_note(const SimulationStudyResult::Solution& s) {
+  if (s.run.ok()) return "";
+  std::ostringstream os;
+  os << "stopped at " << std::setprecision(4) << (s.table.rows() ? s.table(s.table.rows() - 1, 0) : 0.0) << " s: "
+     << (s.run.status == IntegrationStatus::OutOfRange ? "out of range" : "failed");
+  return os.str();
+}
+
+/// `title` of a series of run `s`, with the stopped note of a run that stopped:
+/// "full nonlinear (stopped at ...)", "full nonlinear (no stiffening; stopped at ...)".
+std::string run_title(const SimulationStudyResult::Solution& s, const std::string& title) {
+  const std::string note = stopped_note(s);
+  if (note.empty()) return title;
+  if (!title.empty() && title.back() == ')') return title.substr(0, title.size() - 1) + "; " + note + ")";
+  return title + " (" + note + ")";
+}
+
+/// A series of run `s` in a figure: a run that stopped is named so and does not set the
+/// y range when a completed run is beside it (its last values may be far off).
+PlotSeries run_series(const SimulationStudyResult::Solution& s, const std::string& file, int column,
+                      const std::string& title, const std::string& style) {
+  PlotSeries p{file, 1, column, run_title(s, title), style};
+  p.sets_range = s.run.ok();
+  return p;
+}
+
+}  // namespace
 
 void write_simulation(const Design& design, const SimulationStudyResult& r, RunOutput& out) {
   const SimulationStudy& st = *design.simulation;
@@ -411,9 +446,9 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
       if (c == c_left && x_left == 0.0) continue;  // o at the left end: that tip is clamped
       const std::string side = c == c_left ? "left tip [m]" : "right tip [m]";
       std::vector<PlotSeries> series;
-      if (nl_ok) series.push_back({"nonlinear.csv", 1, c, "full nonlinear" + own, "lines"});
-      if (cmp_ok) series.push_back({cmp_csv, 1, c, "full nonlinear" + other, "lines dt 2"});
-      if (pt_ok) series.push_back({"perturbation.csv", 1, c, "first order" + own, "lines dt 3"});
+      if (nl_ok) series.push_back(run_series(*r.nonlinear, "nonlinear.csv", c, "full nonlinear" + own, "lines"));
+      if (cmp_ok) series.push_back(run_series(*r.comparison, cmp_csv, c, "full nonlinear" + other, "lines dt 2"));
+      if (pt_ok) series.push_back(run_series(*r.perturbation, "perturbation.csv", c, "first order" + own, "lines dt 3"));
       tips.panels.push_back({side, "t [s]", side, series});
     }
     out.plot(tips, design.plots);
@@ -422,15 +457,13 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
   // Figures in the manner of the paper's Figs. 4-7: both solutions overlaid.
   if (nl_ok || pt_ok) {
     const Eigen::MatrixXd& any = nl_ok ? r.nonlinear->run.z : r.perturbation->run.z;
-    auto moves = [&](int c) {
-      double m = any.col(c).cwiseAbs().maxCoeff();
-      if (nl_ok && pt_ok) m = std::max(m, r.perturbation->run.z.col(c).cwiseAbs().maxCoeff());
-      return m > 1e-9;
+    auto moves = [&](int c) {  // in either run
+      return detail::moves(any.col(c)) || (nl_ok && pt_ok && detail::moves(r.perturbation->run.z.col(c)));
     };
     auto series = [&](int col, const std::string& what) {
       std::vector<PlotSeries> s;
-      if (nl_ok) s.push_back({"nonlinear.csv", 1, col, what + " full nonlinear", "lines"});
-      if (pt_ok) s.push_back({"perturbation.csv", 1, col, what + " perturbation", "lines dt 2"});
+      if (nl_ok) s.push_back(run_series(*r.nonlinear, "nonlinear.csv", col, what + " full nonlinear", "lines"));
+      if (pt_ok) s.push_back(run_series(*r.perturbation, "perturbation.csv", col, what + " perturbation", "lines dt 2"));
       return s;
     };
     PlotSpec rigid{st.rigid_figure, "Rigid-body motion: " + design.title, {}};
@@ -454,8 +487,9 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
                   {"tip deflection, right end", "t [s]", "w(right) [m]", {}},
                   {"vibration energy (log scale)", "t [s]", "E_vib [J]", {}, true}}};
     std::string energy_note;
+    double peak_left = 0.0, peak_right = 0.0;  // of the runs drawn
     for (const auto* sol : {&r.nonlinear, &r.perturbation}) {
-      if (!*sol || !(*sol)->run.ok()) continue;
+      if (!*sol || !(*sol)->table.size()) continue;  // a run that stopped: what it computed, named so
       const std::vector<std::string>& header = (*sol)->header;
       const auto col = [&](const char* name) {
         return static_cast<int>(std::find(header.begin(), header.end(), name) - header.begin()) + 1;
@@ -466,15 +500,24 @@ void write_simulation(const Design& design, const SimulationStudyResult& r, RunO
       const std::string file = full ? "nonlinear.csv" : "perturbation.csv";
       const std::string label = full ? "full nonlinear" : "perturbation";
       const std::string style = full ? "lines" : "lines dt 2";
-      vib.panels[0].series.push_back({file, 1, tl, label, style});
-      vib.panels[1].series.push_back({file, 1, tl + 1, label, style});
-      vib.panels[2].series.push_back({file, 1, energy, label, style});
+      vib.panels[0].series.push_back(run_series(**sol, file, tl, label, style));
+      vib.panels[1].series.push_back(run_series(**sol, file, tl + 1, label, style));
+      vib.panels[2].series.push_back(run_series(**sol, file, energy, label, style));
+      peak_left = std::max(peak_left, (*sol)->table.col(tl - 1).cwiseAbs().maxCoeff());
+      peak_right = std::max(peak_right, (*sol)->table.col(tl).cwiseAbs().maxCoeff());
+      if (!(*sol)->run.ok()) continue;  // no end to tell: its key says where it stopped
       std::ostringstream note;
       note << (energy_note.empty() ? "; at the end: " : ", ") << label << " " << std::setprecision(3)
            << (*sol)->table(((*sol)->table.rows() - 1), energy - 1) << " J";
       energy_note += note.str();
     }
     vib.panels[2].title += energy_note;
+    // an end that does not deflect (clamped at o: a cantilever's root) would be a panel of
+    // round-off: left out when its deflection is negligible beside the other end's
+    if (peak_left < kNegligibleEnd * peak_right)
+      vib.panels.erase(vib.panels.begin());
+    else if (peak_right < kNegligibleEnd * peak_left)
+      vib.panels.erase(vib.panels.begin() + 1);
     out.plot(vib, design.plots);
   }
 }

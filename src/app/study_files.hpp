@@ -18,6 +18,14 @@ std::string status_text(const R& r) {
   return r.ok() ? "ok" : to_string(r.status);
 }
 
+/// Figures leave out a coordinate whose largest excursion is at most this: one that
+/// never moves (R_x, R_y of a pure rotation) would be a flat panel at zero.
+inline constexpr double kMovingCoordinate = 1e-9;
+/// Whether a coordinate's history moves (see kMovingCoordinate).
+inline bool moves(const Eigen::Ref<const Eigen::VectorXd>& history) {
+  return history.size() > 0 && history.cwiseAbs().maxCoeff() > kMovingCoordinate;
+}
+
 void write_free_vibration(const Design& design, const FreeVibrationStudyResult& r, RunOutput& out);
 Json to_json(const Design& design, const FreeVibrationStudyResult& r);
 

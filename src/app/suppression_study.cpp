@@ -278,6 +278,18 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
   const Eigen::RowVectorXd phi_l = body.basis().value(body.beam().x_left());
   const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
   const int n = body.n();
+  // each case its own colour, in every panel and in the commands' figure; the model told
+  // apart by the dash (first order dashed, nonlinear solid)
+  std::vector<std::string> case_names;
+  for (const auto& c : r.cases)
+    if (std::find(case_names.begin(), case_names.end(), c.name) == case_names.end()) case_names.push_back(c.name);
+  auto color = [&](const std::string& name) {
+    return series_color(static_cast<std::size_t>(std::find(case_names.begin(), case_names.end(), name) -
+                                                 case_names.begin()));
+  };
+  auto style = [](const SuppressionStudyResult::Case& c) {
+    return c.model == "nonlinear" ? std::string("lines") : std::string("lines dt 2");
+  };
   for (const auto& c : r.cases) {
     const ResponseMetrics& m = c.metrics;
     csv << c.name << ',' << c.model << ',' << num(m.residual_vibration_energy_J) << ','
@@ -296,11 +308,10 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     const std::string file = "case_" + c.name + "_" + c.model + ".csv";
     out.csv(file, {"t", "tip_left_m", "tip_right_m", "vibration_energy_J"}, h);
     const std::string label = c.name + " (" + c.model + ")";
-    const std::string style = c.model == "nonlinear" ? "lines" : "lines dt 2";
-    fig.panels[0].series.push_back({file, 1, 3, label, style});
+    fig.panels[0].series.push_back({file, 1, 3, label, style(c), true, color(c.name)});
     std::ostringstream energy_label;  // what the figure shows: the energy each case leaves
     energy_label << label << " " << std::setprecision(3) << m.residual_vibration_energy_J << " J";
-    fig.panels[1].series.push_back({file, 1, 4, energy_label.str(), style});
+    fig.panels[1].series.push_back({file, 1, 4, energy_label.str(), style(c), true, color(c.name)});
   }
   out.write("comparison.csv", csv.str());
   out.plot(fig, design.plots);
@@ -339,8 +350,8 @@ void write_suppression(const Design& design, const SuppressionStudyResult& r, Ru
     for (std::size_t k = 0; k < st.actuators.size(); ++k)
       cmd.panels[k].series.push_back(
           {file, 1, 2 + static_cast<int>(k), c.name + " (" + c.model + ")",
-           // dashed: the first-order model's, or the rigid optimum's beside the vibration-aware one it lies on
-           c.model == "nonlinear" && c.name.rfind("rigid_optimum_", 0) != 0 ? "lines" : "lines dt 2"});
+           // dash-dot: the rigid optimum's, beside the vibration-aware one it would hide
+           several && c.name.rfind("rigid_optimum_", 0) == 0 ? "lines dt 4" : style(c), true, color(c.name)});
   }
   out.plot(cmd, design.plots);
 }

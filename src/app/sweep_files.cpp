@@ -157,6 +157,7 @@ void write_sweep(const Design& design, const SweepStudyResult& r, RunOutput& out
   PlotSpec fig{sw.figure, "Sweep of " + std::to_string(r.samples.size()) + " samples: " + design.title,
                {{"residual vibration energy (requirement: log10 E = " + cell(std::log10(sw.requirement_energy_J)) + ")",
                  "log10 E_vib(end) [J]", "samples", {{counts, 1, 2, "samples", "boxes"}}}}};
+  fig.panels[0].x_to_data = false;  // bars: room for the outer ones
   out.plot(fig, design.plots);
 }
 

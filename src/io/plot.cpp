@@ -86,7 +86,30 @@ std::string seconds_text(double s) {
   return os.str();
 }
 
+/// Characters (not bytes) of `s` as a figure shows it.
+std::size_t shown_length(const std::string& s) {
+  std::size_t n = 0;
+  for (char c : figure_text(s)) n += (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  return n;
+}
+
+/// Left margin of every panel, in characters: the y tics ("-0.0005", "1e-12") and label.
+constexpr int kLeftMarginChars = 12;
+/// About 8 px a character width of the margins at Sans 10, a key's text up to 7 px a
+/// character, its sample line and gaps about 80 px.
+constexpr double kMarginCharPx = 8.0, kKeyCharPx = 7.0, kKeySamplePx = 80.0;
+/// Plots narrower than this (px) widen the figure.
+constexpr int kMinPlotWidthPx = 480;
+
 }  // namespace
+
+std::string series_color(std::size_t index) {
+  // distinct hues, then darker and greyer ones; no black (the limit lines are black)
+  static constexpr std::array<const char*, kSeriesColors> palette{
+      "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
+      "#e377c2", "#17becf", "#7f7f7f", "#bcbd22", "#000080", "#800000"};
+  return palette[index % palette.size()];
+}
 
 std::string built_in_gnuplot() {
   const std::string g = FREEFLEX_GNUPLOT;
@@ -104,28 +127,58 @@ PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotO
   validate(options);
   const int panels = static_cast<int>(spec.panels.size());
   const int height = spec.height_px > 0 ? spec.height_px : 60 + 300 * panels;
+  // one right margin for all panels: the widest key's text
+  std::size_t key_chars = 0;
+  for (const auto& p : spec.panels) {
+    for (const auto& s : p.series) key_chars = std::max(key_chars, shown_length(s.title));
+    if (!p.hlines.empty()) key_chars = std::max(key_chars, shown_length(p.hline_title));
+  }
+  const int right_margin =
+      static_cast<int>(std::ceil((static_cast<double>(key_chars) * kKeyCharPx + kKeySamplePx) / kMarginCharPx));
+  const int width = std::max(
+      spec.width_px, kMinPlotWidthPx + static_cast<int>((kLeftMarginChars + right_margin) * kMarginCharPx));
   std::ostringstream gp;
   gp << "# freeflex figure '" << spec.name << "': gnuplot " << spec.name << ".gp renders " << spec.name
      << ".png\n"
      << "if (!exists('outfile')) outfile = " << quoted(spec.name + ".png") << "\n"
-     << "set terminal pngcairo size " << spec.width_px << "," << height << " font 'Sans,10'\n"
+     << "set terminal pngcairo size " << width << "," << height << " font 'Sans,10'\n"
      << "set output outfile\n"
      << "set datafile separator ','\n"
-     << "set grid\nset key outside right top noenhanced\nset termoption noenhanced\n";
+     << "set grid\nset key outside right top noenhanced\nset termoption noenhanced\n"
+     << "set lmargin " << kLeftMarginChars << "\nset rmargin " << right_margin << "\n";
   if (panels > 1)
-    gp << "set multiplot layout " << panels << ",1 title " << title_text(spec.title, spec.width_px) << "\n";
+    gp << "set multiplot layout " << panels << ",1 title " << title_text(spec.title, width) << "\n";
   else
-    gp << "set title " << title_text(spec.title, spec.width_px) << "\n";
+    gp << "set title " << title_text(spec.title, width) << "\n";
   for (const auto& p : spec.panels) {
     if (panels > 1) gp << "set title " << quoted(p.title) << "\n";
     gp << (p.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '% h'\n");
     gp << "set xlabel " << quoted(p.xlabel) << "\nset ylabel " << quoted(p.ylabel) << "\n";
-    if (!p.hlines.empty()) {
+    gp << (p.x_to_data ? "set autoscale xfix\n" : "set autoscale x\n");
+    // Series that set the y range: all, unless some of them do not (then the others).
+    std::vector<const PlotSeries*> ranging;
+    for (const auto& s : p.series)
+      if (s.sets_range) ranging.push_back(&s);
+    const bool some_left_out = !ranging.empty() && ranging.size() < p.series.size();
+    if (ranging.empty())
+      for (const auto& s : p.series) ranging.push_back(&s);
+    if (p.log_y && some_left_out) {
+      // the positive values of the ranging series, with a factor of 2 as margin
+      gp << "set autoscale y\nstats_lo = 1e300\nstats_hi = 0\n";
+      for (const PlotSeries* s : ranging)
+        gp << "stats " << quoted(s->data_file) << " skip 1 using (column(" << s->y_column << ") > 0 ? column("
+           << s->y_column << ") : NaN) nooutput\nstats_lo = (STATS_min < stats_lo) ? STATS_min : stats_lo\n"
+              "stats_hi = (STATS_max > stats_hi) ? STATS_max : stats_hi\n";
+      gp << "set yrange [stats_lo / 2 : stats_hi * 2]\n";
+    } else if (!p.hlines.empty() || some_left_out) {
       // the data's range and the lines', with 10% of the larger span as margin
-      gp << "set autoscale y\nstats_lo = " << std::min(0.0, *std::min_element(p.hlines.begin(), p.hlines.end()))
-         << "\nstats_hi = " << std::max(0.0, *std::max_element(p.hlines.begin(), p.hlines.end())) << "\n";
-      for (const auto& s : p.series)
-        gp << "stats " << quoted(s.data_file) << " skip 1 using " << s.y_column
+      if (p.hlines.empty())
+        gp << "set autoscale y\nstats_lo = 1e300\nstats_hi = -1e300\n";
+      else
+        gp << "set autoscale y\nstats_lo = " << std::min(0.0, *std::min_element(p.hlines.begin(), p.hlines.end()))
+           << "\nstats_hi = " << std::max(0.0, *std::max_element(p.hlines.begin(), p.hlines.end())) << "\n";
+      for (const PlotSeries* s : ranging)
+        gp << "stats " << quoted(s->data_file) << " skip 1 using " << s->y_column
            << " nooutput\nstats_lo = (STATS_min < stats_lo) ? STATS_min : stats_lo\n"
               "stats_hi = (STATS_max > stats_hi) ? STATS_max : stats_hi\n";
       gp << "stats_pad = 0.1 * (stats_hi - stats_lo + 1e-12)\nset yrange [stats_lo - stats_pad : stats_hi + stats_pad]\n";
@@ -134,13 +187,15 @@ PlotResult render_plot(const PlotSpec& spec, const std::string& dir, const PlotO
     for (std::size_t i = 0; i < p.series.size(); ++i) {
       const auto& s = p.series[i];
       gp << (i ? ", \\\n     " : "") << quoted(s.data_file) << " skip 1 using " << s.x_column << ":" << s.y_column
-         << " with " << s.style << " lw 2 title " << quoted(s.title);
+         << " with " << s.style << " lw 2";
+      if (!s.color.empty()) gp << " lc rgb " << quoted(s.color);
+      gp << " title " << quoted(s.title);
     }
     for (std::size_t i = 0; i < p.hlines.size(); ++i)
       gp << ", \\\n     " << p.hlines[i] << " with lines dt 3 lw 1.5 lc rgb 'black' title "
          << quoted(i == 0 ? p.hline_title : "");
     gp << "\n";
-    if (!p.hlines.empty()) gp << "set autoscale y\n";
+    if (!p.hlines.empty() || some_left_out) gp << "set autoscale y\n";
   }
   if (panels > 1) gp << "unset multiplot\n";
   write_file_atomic(dir + "/" + spec.name + ".gp", gp.str());

@@ -4,6 +4,8 @@
 #include <algorithm>
 
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include <fcntl.h>
@@ -164,6 +166,153 @@ TEST_CASE("a vibration-aware suppression draws the commands of both nominals", "
       CHECK(exists(out + "/" + file));
     }
   CHECK(r.output.find("not drawn") == std::string::npos);
+}
+
+TEST_CASE("a run that stopped out of range is drawn as far as it went, and its key says so", "[cli][figures]") {
+  // the stiffened full model leaves its range at 0.038 s: its stub was labelled as if it
+  // had completed, and vibration.png left it out without a word
+  const std::string out = temp_path("stopped_run");
+  const CliResult r = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) +
+                              "/designs/paper_moment_pulse_stiffening.toml --out " + out + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 1);  // out of range: documented
+  const std::string stopped = "full nonlinear (stopped at 0.038 s: out of range)";
+  const std::string vib = read(out + "/vibration.gp");
+  CHECK_THAT(vib, Contains("'nonlinear.csv' skip 1 using 1:22 with lines lw 2 title '" + stopped + "'"));
+  CHECK_THAT(read(out + "/generalized_displacements.gp"), Contains(stopped));
+  CHECK_THAT(read(out + "/rigid_rotation.gp"), Contains(stopped));
+  CHECK_THAT(read(out + "/tip_deflection.gp"),
+             Contains("title 'full nonlinear (stiffening; stopped at 0.038 s: out of range)'"));
+  CHECK(vib.find("title 'full nonlinear'") == std::string::npos);
+
+  // the spin-up's comparison without stiffening diverges: named so, and the y range is the
+  // completed runs' (its -9 m flattened their -0.4 m)
+  const std::string krb = temp_path("stopped_krb");
+  const CliResult k =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/spinup_krb.toml --out " + krb + " --quiet");
+  INFO(k.output);
+  REQUIRE(k.exit_code == 0);
+  const std::string tips = read(krb + "/tip_deflection.gp");
+  CHECK_THAT(tips, Contains("title 'full nonlinear (no stiffening; stopped at 13.38 s: out of range)'"));
+  CHECK_THAT(tips, Contains("stats 'nonlinear.csv'"));
+  CHECK(tips.find("stats 'nonlinear_stiffening_off.csv'") == std::string::npos);
+  CHECK_THAT(tips, Contains("set yrange [stats_lo"));
+}
+
+TEST_CASE("every case of a suppression keeps one colour of its own, the model told by the dash", "[cli][figures]") {
+  // 6 cases x 2 models on gnuplot's cycle of 8 colours: pairs of cases looked the same
+  const std::string out = temp_path("rotation_at_rest_colours");
+  const CliResult r = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) +
+                              "/designs/suppress_rotation_at_rest.toml --out " + out + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  // series lines: 'case_NAME_MODEL.csv' ... with lines [dt 2] lw 2 lc rgb '#rrggbb' title ...
+  struct Drawn {
+    std::string file, dash, colour;
+  };
+  auto series = [&](const std::string& gp) {
+    std::vector<std::vector<Drawn>> panels;
+    std::istringstream in(gp);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("plot ", 0) == 0) panels.emplace_back();
+      const auto q = line.find('\''), with = line.find(" with "), lc = line.find("lc rgb '");
+      if (panels.empty() || q == std::string::npos || with == std::string::npos || line.find(" skip 1") == std::string::npos)
+        continue;
+      Drawn d;
+      d.file = line.substr(q + 1, line.find('\'', q + 1) - q - 1);
+      d.dash = line.find(" dt ", with) != std::string::npos ? line.substr(line.find(" dt ", with), 6) : "";
+      d.colour = lc == std::string::npos ? "" : line.substr(lc + 8, 7);
+      panels.back().push_back(d);
+    }
+    return panels;
+  };
+  const auto figure = series(read(out + "/comparison.gp"));
+  REQUIRE(figure.size() == 2);
+  std::map<std::string, std::string> colour_of;  // case -> colour
+  for (const auto& panel : figure) {
+    REQUIRE(panel.size() == 12);
+    std::set<std::pair<std::string, std::string>> looks;
+    for (const auto& d : panel) {
+      REQUIRE(d.colour.size() == 7);
+      looks.insert({d.colour, d.dash});
+      const bool first_order = d.file.find("_first_order.csv") != std::string::npos;
+      CHECK(d.dash == (first_order ? " dt 2 " : ""));
+      const std::string name = d.file.substr(5, d.file.rfind(first_order ? "_first_order" : "_nonlinear") - 5);
+      if (!colour_of.count(name)) colour_of[name] = d.colour;
+      CHECK(colour_of[name] == d.colour);  // the same case, the same colour: in both models and panels
+    }
+    CHECK(looks.size() == 12);  // no two series look alike
+  }
+  std::set<std::string> colours;
+  for (const auto& [name, c] : colour_of) colours.insert(c);
+  CHECK(colour_of.size() == 6);
+  CHECK(colours.size() == 6);  // each case its own
+  for (const auto& panel : series(read(out + "/comparison_commands.gp")))
+    for (const auto& d : panel) {
+      const std::string name = d.file.substr(9, d.file.rfind("_nonlinear") - 9);  // commands_NAME_nonlinear.csv
+      CHECK(colour_of[name] == d.colour);
+    }
+  // one pair of margins for all panels (set before the panels): their time axes line up
+  const std::string gp = read(out + "/comparison.gp");
+  CHECK(gp.find("set lmargin ") < gp.find("set multiplot"));
+  CHECK(gp.find("set rmargin ") < gp.find("set multiplot"));
+}
+
+TEST_CASE("the maneuver's figures say which optimum they draw, and skip coordinates that never move", "[cli][figures]") {
+  // they were titled "Actuator commands: <design title>" (claiming the design's LQG or
+  // bang-bang content) and "Optimized rigid maneuver" also for a vibration-aware optimum
+  const std::string rigid = temp_path("titles_min_time");
+  const CliResult r =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/slew_min_time.toml --out " + rigid + " --quiet");
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  CHECK_THAT(read(rigid + "/maneuver_controls.gp"),
+             Contains("title 'Optimized commands (rigid-body optimum; objective: time + command rate) \u2014 Minimum-time"));
+  CHECK_THAT(read(rigid + "/maneuver_states.gp"),
+             Contains("title 'Optimized maneuver''s rigid-body motion (rigid-body optimum; objective: time + command rate)"));
+  // the time axis ends at the maneuver's end, the limit lines run its whole width
+  CHECK_THAT(read(rigid + "/maneuver_controls.gp"), Contains("set autoscale xfix\n"));
+  const std::string aware = temp_path("titles_at_rest");
+  const CliResult a = run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) +
+                              "/designs/suppress_rotation_at_rest.toml --out " + aware + " --quiet");
+  INFO(a.output);
+  REQUIRE(a.exit_code == 0);
+  for (const char* f : {"/maneuver_controls.gp", "/maneuver_states.gp"}) {
+    const std::string gp = read(aware + f);
+    CHECK_THAT(gp, Contains("(vibration-aware optimum: 4 elastic modes, all at rest; objective:"));
+    CHECK(gp.find("rigid maneuver") == std::string::npos);
+    CHECK(gp.find("Actuator commands") == std::string::npos);
+  }
+  // a pure rotation: no flat R_x, R_y panels at zero (as the simulation's figures)
+  const std::string states = read(aware + "/maneuver_states.gp");
+  CHECK(states.find("R_x") == std::string::npos);
+  CHECK(states.find("R_y") == std::string::npos);
+  CHECK_THAT(states, Contains("set ylabel 'theta [rad]'"));
+  for (const char* c : {"set ylabel 'R_x [m]'", "set ylabel 'R_y [m]'", "set ylabel 'theta [rad]'"})
+    CHECK_THAT(read(rigid + "/maneuver_states.gp"), Contains(c));  // a slew moves all three
+}
+
+TEST_CASE("vibration.png leaves out an end that does not deflect", "[cli][figures]") {
+  // the spin-up's cantilever is clamped at its left end (o at the root): that panel drew
+  // +-1e-19 of round-off
+  const std::string krb = temp_path("clamped_end");
+  const CliResult k =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/spinup_krb.toml --out " + krb + " --quiet");
+  INFO(k.output);
+  REQUIRE(k.exit_code == 0);
+  const std::string vib = read(krb + "/vibration.gp");
+  CHECK(vib.find("left end") == std::string::npos);
+  CHECK_THAT(vib, Contains("set title 'tip deflection, right end'"));
+  CHECK_THAT(vib, Contains("set multiplot layout 2,1"));
+  // a free-free beam: both ends
+  const std::string free = temp_path("free_ends");
+  const CliResult f =
+      run_cli("run " + std::string(FREEFLEX_SOURCE_DIR) + "/designs/paper_force_pulse.toml --out " + free + " --quiet");
+  REQUIRE(f.exit_code == 0);
+  const std::string both = read(free + "/vibration.gp");
+  CHECK_THAT(both, Contains("set title 'tip deflection, left end'"));
+  CHECK_THAT(both, Contains("set title 'tip deflection, right end'"));
 }
 
 TEST_CASE("an unreachable maneuver ends infeasible, exit 1, and writes no trajectory", "[cli][trajopt]") {

@@ -19,7 +19,19 @@ struct PlotSeries {
   int y_column = 2;       ///< 1-based
   std::string title;
   std::string style = "lines";  ///< gnuplot style: "lines", "points", "linespoints", "lines dt 2" ...
+  /// false: the series does not set the y range when another series of its panel does
+  /// (a run that stopped out of range, whose last values would flatten the others); it is
+  /// drawn clipped at the axes.
+  bool sets_range = true;
+  /// gnuplot colour ("#rrggbb", see series_color); "": gnuplot's own cycle of 8
+  std::string color{};
 };
+
+/// Colours told apart in a figure: series_color(i) for i < kSeriesColors are distinct
+/// (then they repeat). Give each case of a figure its own index and use it in every panel
+/// and figure that shows the case, so that a case keeps its colour.
+inline constexpr std::size_t kSeriesColors = 12;
+std::string series_color(std::size_t index);
 
 struct PlotPanel {
   std::string title, xlabel, ylabel;
@@ -30,13 +42,20 @@ struct PlotPanel {
   /// that a command at its limit is not clipped by the axis.
   std::vector<double> hlines{};
   std::string hline_title = "limit";
+  /// The x axis ends at the data's first and last x (gnuplot's `autoscale xfix`), not at
+  /// the next tic beyond them: a time axis, along which the limit lines then run the whole
+  /// width. false for boxes (a histogram's outer bars would be cut in half).
+  bool x_to_data = true;
 };
 
+/// Panels share their left and right margins (the key's column, as wide as the widest
+/// key of the figure), so that their x axes line up; the figure is widened when the keys
+/// would leave its plots narrower than about half of it.
 struct PlotSpec {
   std::string name;   ///< file stem: NAME.gp and NAME.png
   std::string title;  ///< figure title (above all panels)
   std::vector<PlotPanel> panels;  ///< stacked vertically
-  int width_px = 900;
+  int width_px = 900;  ///< at least: widened for wide keys
   int height_px = 0;  ///< 0: 300 px per panel plus a header
 };
 
