@@ -1,5 +1,6 @@
 // [lqg] and [sweep] files: the cases' table, histories and figure; one CSV row per sweep
 // sample, the histogram of the residual energies, and their summary.json entries.
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -46,13 +47,15 @@ void write_lqg(const Design& design, const LqgStudyResult& r, RunOutput& out) {
         << cell(m.final_attitude_error_rad) << ',' << cell(m.control_effort) << ',' << cell(m.peak_command) << '\n';
   }
   out.write(lq.table + ".csv", csv.str());
-  // histories: right-tip deflection and vibration energy of each case
+  // histories: right-tip deflection, vibration energy and the computed commands of each case
   const FlexibleBody body = design.body();
   const Eigen::RowVectorXd phi_r = body.basis().value(body.beam().x_right());
   const int N = body.dofs(), n = body.n();
   const Eigen::VectorXd& t = r.cases.front().run.t;
+  const ControllerStudy& st = *design.controller;
+  const int m = static_cast<int>(st.actuator_names.size());
   std::vector<std::string> header{"t_s"};
-  Eigen::MatrixXd h(t.size(), 1 + 2 * static_cast<int>(r.cases.size()));
+  Eigen::MatrixXd h(t.size(), 1 + (2 + m) * static_cast<int>(r.cases.size()));
   h.col(0) = t;
   int col = 1;
   for (const auto& c : r.cases) {
@@ -67,18 +70,44 @@ void write_lqg(const Design& design, const LqgStudyResult& r, RunOutput& out) {
     }
     col += 2;
   }
+  for (const auto& c : r.cases)
+    for (int a = 0; a < m; ++a) {
+      header.push_back("u_" + c.name + "_" + st.actuator_names[static_cast<std::size_t>(a)]);
+      for (int i = 0; i < t.size(); ++i)
+        h(i, col) = i < c.run.commands.rows() && a < c.run.commands.cols() ? c.run.commands(i, a) : std::nan("");
+      ++col;
+    }
   (void)N;
   const std::string hist = lq.table + "_history.csv";
   out.csv(hist, header, h);
   PlotSpec fig{lq.figure, "Sampled TV-LQR (exact state) and LQG (sensors + Kalman filter): " + design.title,
                {{"tip deflection (right end)", "t [s]", "deflection [m]", {}},
-                {"vibration energy", "t [s]", "E_vib [J]", {}, true}}};
+                {"vibration energy", "t [s]", "E_vib [J]", {}, true},
+                {"commands u0 + u1 as computed (before the actuators' gain, delay and lag; dotted: the limits)",
+                 "t [s]", "command [N or N m]", {}}}};
   col = 2;
+  std::size_t k = 0;
   for (const auto& c : r.cases) {
-    fig.panels[0].series.push_back({hist, 1, col, c.name, "lines"});
-    fig.panels[1].series.push_back({hist, 1, col + 1, c.name, "lines"});
+    const std::string colour = series_color(k++);
+    fig.panels[0].series.push_back({hist, 1, col, c.name, "lines", true, colour});
+    fig.panels[1].series.push_back({hist, 1, col + 1, c.name, "lines", true, colour});
     col += 2;
   }
+  k = 0;
+  for (const auto& c : r.cases) {
+    const std::string colour = series_color(k++);
+    for (int a = 0; a < m; ++a)  // one colour per case, one dash per actuator
+      fig.panels[2].series.push_back({hist, 1, col++, c.name + ": " + st.actuator_names[static_cast<std::size_t>(a)],
+                                      a == 0 ? "lines" : "lines dt " + std::to_string(1 + a), true, colour});
+  }
+  for (int a = 0; a < static_cast<int>(st.limits.size()); ++a) {
+    auto& lines = fig.panels[2].hlines;
+    if (std::isfinite(st.limits(a)) && std::find(lines.begin(), lines.end(), st.limits(a)) == lines.end()) {
+      lines.push_back(st.limits(a));
+      lines.push_back(-st.limits(a));
+    }
+  }
+  fig.panels[2].hline_title = "command limits";
   out.plot(fig, design.plots);
 }
 

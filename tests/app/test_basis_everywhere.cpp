@@ -89,3 +89,26 @@ TEST_CASE("[export] and the [lqg]/[sweep] flights use the design's basis", "[app
   CHECK((other->state_space(Instant::at(0.7)).A - model->state_space(Instant::at(0.7)).A).cwiseAbs().maxCoeff() >
         1e-3 * size);
 }
+
+TEST_CASE("lqg.png draws each case's commands against the limits", "[app]") {
+  const Design d = load_design(std::string(FREEFLEX_SOURCE_DIR) + "/designs/lqg_slew.toml");
+  RunOptions ro;
+  ro.out_dir = freeflex_test::temp_path("lqg_commands");
+  ro.plot.gnuplot = "";  // the scripts, no PNG
+  const RunResult r = run_design(d, ro);
+  REQUIRE(r.ok());
+  REQUIRE(r.lqg);
+  const std::string gp = read_text(ro.out_dir + "/" + d.lqg->figure + ".gp");
+  CHECK_THAT(gp, Catch::Matchers::Contains("commands u0 + u1 as computed") &&
+                     Catch::Matchers::Contains("command limits"));
+  std::ifstream csv(ro.out_dir + "/" + d.lqg->table + "_history.csv");
+  std::string header, first;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  // one column per case and actuator, after the tip and energy columns
+  const auto& c = r.lqg->cases.back();
+  const std::string column = "u_" + c.name + "_" + d.controller->actuator_names.back();
+  CHECK_THAT(header, Catch::Matchers::EndsWith(column));
+  const double last = std::stod(first.substr(first.rfind(',') + 1));
+  CHECK(last == Approx(c.run.commands(0, c.run.commands.cols() - 1)).margin(1e-15));  // the value written (17 digits)
+}
