@@ -19,21 +19,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// True when the closed-form free-free beam applies: one uniform span, no hub, no payload.
-bool is_plain_uniform(const Beam& beam) {
-  const auto& p = beam.properties();
-  for (const auto& s : p.segments)
-    if (s.tapered() || s.mass_per_length_kg_m != p.segments[0].mass_per_length_kg_m ||
-        s.bending_stiffness_Nm2 != p.segments[0].bending_stiffness_Nm2)
-      return false;
-  for (const auto& pm : p.point_masses)
-    if (pm.mass_kg != 0.0) return false;
-  return p.hub_mass_kg == 0.0 && p.hub_rotary_inertia_kgm2 == 0.0;
-}
-
 }  // namespace
 
-bool has_exact_modes(const Design& design) { return is_plain_uniform(Beam(design.beam)); }
+bool has_exact_modes(const Design& design) { return design.beam.plain_uniform(); }
 
 ModeTable mode_table(const Design& design, int noa, bool estimate_error) {
   const Beam beam(design.beam);
@@ -91,7 +79,7 @@ ModeTable mode_table(const Design& design, int noa, bool estimate_error) {
 FreeVibrationStudyResult run_free_vibration_study(const Design& design, const StudyLog& study_log) {
   const FreeVibrationStudy& study = *design.free_vibration;
   const Beam beam(design.beam);
-  const bool exact = is_plain_uniform(beam);
+  const bool exact = beam.properties().plain_uniform();
   const std::vector<int> sweep = study.noa_sweep.empty() ? std::vector<int>{design.noa} : study.noa_sweep;
   std::ostream* log = study_log.log;
   FreeVibrationStudyResult r;

@@ -10,18 +10,6 @@
 namespace freeflex::io_detail {
 namespace {
 
-/// True when the closed-form free-free beam gives the frequencies (one uniform span, no
-/// hub, no payload): the study then estimates no error (has_exact_modes).
-bool plain_uniform(const BeamProperties& p) {
-  for (const auto& s : p.segments)
-    if (s.tapered() || s.mass_per_length_kg_m != p.segments[0].mass_per_length_kg_m ||
-        s.bending_stiffness_Nm2 != p.segments[0].bending_stiffness_Nm2)
-      return false;
-  for (const auto& pm : p.point_masses)
-    if (pm.mass_kg != 0.0) return false;
-  return p.hub_mass_kg == 0.0 && p.hub_rotary_inertia_kgm2 == 0.0;
-}
-
 /// Element-modes (elements x (modes + 2)) of the element models the study solves on the
 /// finite-element basis (as run_free_vibration_study and mode_table build them).
 double basis_work(const Design& d, const FreeVibrationStudy& fv) {
@@ -29,7 +17,7 @@ double basis_work(const Design& d, const FreeVibrationStudy& fv) {
   const double pieces = static_cast<double>(d.beam.segments.size() + d.beam.point_masses.size());
   const double E = std::max(static_cast<double>(fe.elements), pieces + 2.0);  // raised to one per interval
   auto build = [](double elements, double modes) { return elements * (modes + 2.0); };
-  const bool estimate = !plain_uniform(d.beam);
+  const bool estimate = !d.beam.plain_uniform();  // exact modes: no error estimate (has_exact_modes)
   const bool clamped = fe.modes == FiniteElementOptions::Modes::ClampedAtReference;
   double work = 0.0;
   const std::vector<int> sweep = fv.noa_sweep.empty() ? std::vector<int>{d.noa} : fv.noa_sweep;

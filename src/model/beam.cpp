@@ -32,6 +32,16 @@ BeamProperties BeamProperties::uniform(double length_m, double mass_kg, double e
   return p;
 }
 
+bool BeamProperties::plain_uniform() const {
+  for (const auto& s : segments)
+    if (s.tapered() || s.mass_per_length_kg_m != segments[0].mass_per_length_kg_m ||
+        s.bending_stiffness_Nm2 != segments[0].bending_stiffness_Nm2)
+      return false;
+  for (const auto& pm : point_masses)
+    if (pm.mass_kg != 0.0) return false;
+  return hub_mass_kg == 0.0 && hub_rotary_inertia_kgm2 == 0.0;
+}
+
 Beam::Beam(BeamProperties props) : props_(std::move(props)) {
   if (props_.segments.empty()) throw std::invalid_argument("beam: at least one segment is required");
   for (std::size_t i = 0; i < props_.segments.size(); ++i) {

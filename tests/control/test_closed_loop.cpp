@@ -12,6 +12,7 @@
 #include "freeflex/model/basis.hpp"
 #include "freeflex/sim/simulate.hpp"
 #include "support/bodies.hpp"
+#include "support/moment_case.hpp"
 
 using namespace freeflex;
 
@@ -147,22 +148,9 @@ namespace {
 
 /// The moment example's first-order model (NOA 4) about the pulse's nominal motion, with
 /// TV-LQR options tight enough (rtol 1e-10) that two ways of solving must agree to 1e-7.
-struct AgreementCase {
-  FlexibleBody body = moment_body(4);
-  Excitation loads = moment_loads();
-  PerturbationResult pert;
-  std::unique_ptr<FirstOrderModel> model;
-  Eigen::MatrixXd Q, R;
+struct AgreementCase : freeflex_test::MomentCase {
   TvlqrOptions options;
-  AgreementCase() {
-    SimulationOptions so;
-    so.duration_s = 3.0;
-    so.output_step_s = 0.01;
-    pert = simulate_perturbation(body, loads, so);
-    const std::vector<int> inputs{1, 2, 3};
-    model = std::make_unique<FirstOrderModel>(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
-    Q = vibration_weight(body, 1.0, 10.0, 1.0);
-    R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
+  AgreementCase() : MomentCase(4) {
     options.rtol = 1e-10;
     options.atol = 1e-12;
     options.grid_step_s = 0.05;

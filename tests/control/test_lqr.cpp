@@ -16,6 +16,7 @@
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/sim/integrator.hpp"
 #include "support/bodies.hpp"
+#include "support/systems.hpp"
 
 using namespace freeflex;
 using Catch::Matchers::Contains;
@@ -305,22 +306,8 @@ TEST_CASE("TV-LQR: a work budget stops the backward sweep with the time reached"
 TEST_CASE("TV-LQR with forcing: the simulated cost equals the predicted value, perturbations cost more",
           "[control]") {
   // Two states, one input, A(t), B(t), g(t) smooth with one breakpoint where g jumps.
-  LtvSystem sys;
-  sys.state_size = 2;
-  sys.input_size = 1;
-  sys.breakpoints = {0.8};
-  auto model = [](const Instant& at) {
-    const double t = at.t;
-    StateSpace m;
-    m.A.resize(2, 2);
-    m.A << 0.0, 1.0, -4.0 - std::sin(3.0 * t), -0.1;
-    m.B.resize(2, 1);
-    m.B << 0.0, 1.0 + 0.3 * std::cos(2.0 * t);
-    m.g.resize(2);
-    m.g << 0.0, at.piece_mid < 0.8 ? 2.0 : -1.0;
-    return m;
-  };
-  sys.state_space = model;
+  const LtvSystem sys = freeflex_test::forced_system();
+  const auto& model = sys.state_space;
   const Eigen::MatrixXd Q = Eigen::Matrix2d::Identity() * 3.0, R = Eigen::MatrixXd::Constant(1, 1, 0.2);
   TvlqrOptions o;
   o.Qf = Eigen::Matrix2d::Identity() * 5.0;

@@ -20,6 +20,8 @@
 #include "freeflex/control/tvlqr.hpp"
 #include "freeflex/sim/simulate.hpp"
 #include "support/bodies.hpp"
+#include "support/moment_case.hpp"
+#include "support/systems.hpp"
 
 using namespace freeflex;
 using Catch::Matchers::Contains;
@@ -67,23 +69,10 @@ struct LtvCase {
   TvlqrOptions options;
 };
 
-/// Two states, one input, A(t), B(t), g(t) smooth with one breakpoint where g jumps.
+/// The forced system (support/systems.hpp) with its weights and tight tolerances.
 LtvCase forced_case() {
   LtvCase c;
-  c.sys.state_size = 2;
-  c.sys.input_size = 1;
-  c.sys.breakpoints = {0.8};
-  c.sys.state_space = [](const Instant& at) {
-    const double t = at.t;
-    StateSpace m;
-    m.A.resize(2, 2);
-    m.A << 0.0, 1.0, -4.0 - std::sin(3.0 * t), -0.1;
-    m.B.resize(2, 1);
-    m.B << 0.0, 1.0 + 0.3 * std::cos(2.0 * t);
-    m.g.resize(2);
-    m.g << 0.0, at.piece_mid < 0.8 ? 2.0 : -1.0;
-    return m;
-  };
+  c.sys = freeflex_test::forced_system();
   c.Q = Eigen::Matrix2d::Identity() * 3.0;
   c.R = Eigen::MatrixXd::Constant(1, 1, 0.2);
   c.options.Qf = Eigen::Matrix2d::Identity() * 5.0;
@@ -111,24 +100,7 @@ LawDifference difference(const TvlqrResult& a, const TvlqrResult& b) {
   return d;
 }
 
-/// The paper's moment example's first-order model about its nominal motion (3 s).
-struct MomentCase {
-  FlexibleBody body;
-  Excitation loads = freeflex_test::moment_loads();
-  PerturbationResult pert;
-  std::unique_ptr<FirstOrderModel> model;
-  Eigen::MatrixXd Q, R;
-  explicit MomentCase(int noa) : body(freeflex_test::moment_body(noa)) {
-    SimulationOptions so;
-    so.duration_s = 3.0;
-    so.output_step_s = 0.01;
-    pert = simulate_perturbation(body, loads, so);
-    const std::vector<int> inputs{1, 2, 3};
-    model = std::make_unique<FirstOrderModel>(body, *pert.nominal, nominal_element_commands(loads, inputs), inputs);
-    Q = vibration_weight(body, 1.0, 10.0, 1.0);
-    R = Eigen::Vector3d(1.0, 0.25, 0.25).asDiagonal();
-  }
-};
+using freeflex_test::MomentCase;
 
 }  // namespace
 

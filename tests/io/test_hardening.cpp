@@ -21,11 +21,6 @@ using namespace freeflex_test;
 using Catch::Contains;
 
 namespace {
-std::string repeated(const std::string& s, int n) {
-  std::string r;
-  for (int i = 0; i < n; ++i) r += s;
-  return r;
-}
 // A maneuver with one hub torque; [maneuver] on line 9, `extra` from line 12 on.
 std::string maneuver(const std::string& extra) {
   return kPaperBeam + "[[actuator]]\nname = \"hub\"\ntype = \"torque\"\nposition_m = 0.5\n" +

@@ -16,12 +16,6 @@ using Catch::Contains;
 
 namespace {
 
-std::string repeated(const std::string& s, int n) {
-  std::string r;
-  for (int i = 0; i < n; ++i) r += s;
-  return r;
-}
-
 std::string numbers(int n, double first, double step) {
   std::string s = "[";
   for (int i = 0; i < n; ++i) s += (i ? ", " : "") + std::to_string(first + i * step);

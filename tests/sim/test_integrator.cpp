@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "support/systems.hpp"
 #include "freeflex/sim/integrator.hpp"
 #include "sim/fast_nvector.hpp"
 #include "support/integration.hpp"
@@ -31,18 +32,7 @@ using Method = IntegratorOptions::Method;
 namespace {
 
 
-/// x'' = -w^2 x as a first-order system, counting the right-hand side calls.
-OdeSystem oscillator(double w, long* calls) {
-  OdeSystem sys;
-  sys.dim = 2;
-  sys.rhs = [w, calls](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xd) {
-    ++*calls;
-    xd(0) = x(1);
-    xd(1) = -w * w * x(0);
-    return true;
-  };
-  return sys;
-}
+using freeflex_test::oscillator;
 
 }  // namespace
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "support/systems.hpp"
 #include "freeflex/sim/integrator.hpp"
 #include "sim/rk_tableaus.hpp"
 #include "support/integration.hpp"
@@ -79,18 +80,7 @@ IntegratorOptions explicit_rk(Method m, double rtol = 1e-8, double atol = 1e-10)
 
 IntegratorOptions dop853(double rtol = 1e-8, double atol = 1e-10) { return explicit_rk(Method::Dop853, rtol, atol); }
 
-/// x'' = -w^2 x as a first-order system, counting the right-hand side calls.
-OdeSystem oscillator(double w, long* calls) {
-  OdeSystem sys;
-  sys.dim = 2;
-  sys.rhs = [w, calls](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xd) {
-    ++*calls;
-    xd(0) = x(1);
-    xd(1) = -w * w * x(0);
-    return true;
-  };
-  return sys;
-}
+using freeflex_test::oscillator;
 
 }  // namespace
 

@@ -4,7 +4,6 @@
 #include <utility>
 #include <vector>
 
-#include "freeflex/control/tvlqr.hpp"
 #include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/dynamics/flexible_body.hpp"
 #include "freeflex/dynamics/zero_order.hpp"
@@ -75,18 +74,6 @@ class RestTrajectory : public freeflex::RigidTrajectory {
  private:
   freeflex::RigidState s_;
 };
-
-/// x' = a x + b u: the scalar system of the Riccati closed forms.
-inline freeflex::LtvSystem scalar_system(double a, double b) {
-  freeflex::LtvSystem sys;
-  sys.state_size = 1;
-  sys.input_size = 1;
-  sys.state_space = [a, b](const freeflex::Instant&) {
-    return freeflex::StateSpace{Eigen::MatrixXd::Constant(1, 1, a), Eigen::MatrixXd::Constant(1, 1, b),
-                                Eigen::VectorXd::Zero(1)};
-  };
-  return sys;
-}
 
 inline freeflex::CommandFunction no_commands() {
   return [](const freeflex::Instant&, Eigen::Ref<Eigen::VectorXd> c) { c.setZero(); };

@@ -31,4 +31,11 @@ inline const std::string kLoad =  // lines 5-13
     "[[load]]\nname = \"F\"\ntype = \"force\"\nposition_m = 0.5\ndirection = [0.0, 1.0]\n"
     "[load.profile]\ntype = \"steps\"\ntimes_s = [0.0, 0.5, 1.0]\nvalues = [1.0, -1.0]\n";
 
+/// s repeated n times (designs at and past a size bound).
+inline std::string repeated(const std::string& s, int n) {
+  std::string r;
+  for (int i = 0; i < n; ++i) r += s;
+  return r;
+}
+
 }  // namespace freeflex_test

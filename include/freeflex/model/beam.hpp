@@ -44,6 +44,10 @@ struct BeamProperties {
 
   /// Uniform beam of length L, total mass m and stiffness EI, o at the centre.
   static BeamProperties uniform(double length_m, double mass_kg, double bending_stiffness_Nm2);
+
+  /// One uniform span (equal, untapered segments), no hub and no payload: the closed-form
+  /// free-free beam gives its frequencies exactly.
+  bool plain_uniform() const;
 };
 
 /// Validated, immutable beam. Construction throws std::invalid_argument naming the
