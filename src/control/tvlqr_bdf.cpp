@@ -2,6 +2,7 @@
 // state piece by piece, and the same integrator for single steps of the exponential sweep.
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <cvodes/cvodes.h>
 
@@ -36,7 +37,7 @@ void record_packed(const Sweep& sw, RiccatiData& d, int idx, const double* y) {
   Eigen::Map<const Eigen::VectorXd> sh(y + nt, n);
   Eigen::MatrixXd K = d.B().transpose() * Psym;
   d.Rllt.solveInPlace(K);
-  res.K[idx] = K;
+  res.K[idx] = std::move(K);  // stored as computed: no second allocation
   Eigen::VectorXd ff = d.B().transpose() * sh;
   d.Rllt.solveInPlace(ff);
   res.feedforward.row(idx) = -d.sigma * ff.transpose();
