@@ -63,18 +63,32 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
     if (free_time()) Y_.col(q - 1).head(nx) = (sg / 8.0) * (f_.col(k) - f_.col(k + 1));
     Eigen::MatrixXd& Hbuf_ = c.dyn.H;
     dyn_.calc_hessian(c.dyn, xc_.col(k), w.segment(mid_control_offset(k), nu_), lam);
-    // only the rows H can use take part (a rigid model's H lives on θ and the commands)
-    const int na = static_cast<int>(h_rows_.size());
-    c.Ya.resize(na, q);
-    c.Ha.resize(na, na);
-    for (int i = 0; i < na; ++i) {
-      c.Ya.row(i) = Y_.row(h_rows_[i]);
-      for (int j = 0; j < na; ++j) c.Ha(i, j) = s * Hbuf_(h_rows_[i], h_rows_[j]);
+    // H vanishes on h_rest_ x h_rest_ (S = h_cover_, C = h_rest_), so
+    // Yᵀ H Y = Y_Sᵀ (H_SS Y_S + K) + Kᵀ Y_S with K = H_SC Y_C: one product Lᵀ R with
+    // L = [Y_S; K], R = [H_SS Y_S + K; Y_S], of inner dimension 2|S| (8 for the flexible
+    // model, against the 20 rows of H).
+    const int ns = static_cast<int>(h_cover_.size()), nr = static_cast<int>(h_rest_.size());
+    c.L.resize(2 * ns, q);
+    c.R.resize(2 * ns, q);
+    c.Yr.resize(nr, q);
+    c.Hsr.resize(ns, nr);
+    c.Hss.resize(ns, ns);
+    for (int i = 0; i < ns; ++i) {
+      c.L.row(i) = Y_.row(h_cover_[i]);
+      for (int j = 0; j < nr; ++j) c.Hsr(i, j) = s * Hbuf_(h_cover_[i], h_rest_[j]);
+      for (int j = 0; j < ns; ++j) c.Hss(i, j) = s * Hbuf_(h_cover_[i], h_cover_[j]);
     }
-    c.HaYa.noalias() = c.Ha * c.Ya;
+    for (int i = 0; i < nr; ++i) c.Yr.row(i) = Y_.row(h_rest_[i]);
+    if (nr > 0)
+      c.L.bottomRows(ns).noalias() = c.Hsr * c.Yr;
+    else
+      c.L.bottomRows(ns).setZero();
+    c.R.topRows(ns) = c.L.bottomRows(ns);
+    c.R.topRows(ns).noalias() += c.Hss * c.L.topRows(ns);
+    c.R.bottomRows(ns) = c.L.topRows(ns);
     // B is symmetric and only its lower triangle is read (dense_act_ ascends; the T row is last)
     B_.resize(q, q);
-    B_.triangularView<Eigen::Lower>() = c.Ya.transpose() * c.HaYa;
+    B_.triangularView<Eigen::Lower>() = c.L.transpose() * c.R;
     if (free_time()) {
       const int iT = q - 1;
       // s' ∂g/∂v with ∂g/∂v = λᵀ J_c Y; ∂²x_c/∂T∂z_a = σ/8 J_a, ∂²x_c/∂T∂z_b = −σ/8 J_b

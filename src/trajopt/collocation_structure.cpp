@@ -334,6 +334,29 @@ void CollocationNlp::build_compressed_hessian_structure(const std::function<int(
     h_rows_.clear();
     for (int i = 0; i < nz_; ++i)
       if (hrow[i]) h_rows_.push_back(i);
+    // A vertex cover of H_c's pattern, greedy by degree: every entry has its row or its
+    // column in h_cover_, so the block on h_rest_ x h_rest_ vanishes (for the flexible model
+    // the cover is θ, ω and the commands, the rest the elastic state).
+    std::vector<std::vector<int>> nbr(nz_);
+    for (const auto& rc : dyn_.hessian_pattern()) {
+      nbr[rc.first].push_back(rc.second);
+      nbr[rc.second].push_back(rc.first);
+    }
+    std::vector<int> degree(nz_, 0);
+    for (int i = 0; i < nz_; ++i) {
+      std::sort(nbr[i].begin(), nbr[i].end());
+      nbr[i].erase(std::unique(nbr[i].begin(), nbr[i].end()), nbr[i].end());
+      degree[i] = static_cast<int>(nbr[i].size());
+    }
+    std::vector<bool> cover(nz_, false);
+    for (const auto& rc : dyn_.hessian_pattern()) {
+      const int i = rc.first, j = rc.second;
+      if (cover[i] || cover[j]) continue;
+      cover[degree[j] > degree[i] || (degree[j] == degree[i] && j < i) ? j : i] = true;
+    }
+    h_cover_.clear();
+    h_rest_.clear();
+    for (int i : h_rows_) (cover[i] ? h_cover_ : h_rest_).push_back(i);
     auto ynz = [&](int i, int c) {
       return i == c || std::find(fpat.begin(), fpat.end(), std::make_pair(i, c)) != fpat.end();
     };

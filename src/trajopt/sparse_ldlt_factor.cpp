@@ -33,7 +33,7 @@ T* room(std::vector<T>& v, std::size_t n) {
 }
 
 struct Workspace {
-  std::vector<int> where, idx, kind, nchild, local;
+  std::vector<int> where, idx, kind, nchild, local, run_end;
   std::vector<double> val, front, temp;
   std::vector<double> stack;    // contribution blocks (r x r, column major), stack_used of it in use
   std::size_t stack_used = 0;
@@ -74,9 +74,9 @@ class Front {
         update(kb, k, k, q_);
         kb = k;
       }
-      if (kb < k) refresh(kb, k);
+      const double g = kb < k ? refresh(kb, k) : -1.0;  // the column's largest off-diagonal entry
       const double d = F(k, k);
-      if (d != 0.0 && std::abs(d) >= u * max_abs(&F(k + 1, k), m_ - k - 1)) {
+      if (d != 0.0 && std::abs(d) >= u * (g >= 0.0 ? g : max_abs(&F(k + 1, k), m_ - k - 1))) {
         res.negative += d < 0.0 ? 1 : 0;
         scale_column(k);
         kind_.push_back(1);
@@ -189,11 +189,11 @@ class Front {
   }
 
   /// Column k brought up to date with the pivots [kb, k) (all 1x1): F(k:, k) -= L(k:, kb:k)
-  /// (L D)(k, kb:k)ᵀ.
-  void refresh(int kb, int k) {
+  /// (L D)(k, kb:k)ᵀ; returns the largest |F(i, k)|, i > k, of the result.
+  double refresh(int kb, int k) {
     double* t = room(temp_, k - kb);
     for (int c = kb; c < k; ++c) t[c - kb] = F(k, c) * F(c, c);
-    column_update(m_ - k, k - kb, &F(k, kb), m_, t, &F(k, k));
+    return column_update_max(m_ - k, k - kb, &F(k, kb), m_, t, &F(k, k));
   }
 
   /// L's column k from pivot k (1x1): the column below the diagonal over the pivot.
@@ -334,11 +334,20 @@ LdltFactorStatus ldlt_factor(const LdltSymbolic& s, const double* values, double
       const double* cb = w.stack.data() + blk.off;
       const int* ci = w.stack_idx.data() + blk.idx_off;
       w.local.resize(blk.r);
+      w.run_end.resize(blk.r);
       for (int x = 0; x < blk.r; ++x) w.local[x] = w.where[ci[x]];
+      // runs of rows that land on consecutive front rows: added as contiguous slices
+      for (int x = blk.r - 1; x >= 0; --x)
+        w.run_end[x] = x + 1 < blk.r && w.local[x + 1] == w.local[x] + 1 ? w.run_end[x + 1] : x + 1;
       for (int y = 0; y < blk.r; ++y) {
         double* col = F + static_cast<std::ptrdiff_t>(w.local[y]) * m;
         const double* from = cb + static_cast<std::ptrdiff_t>(y) * blk.r;
-        for (int x = y; x < blk.r; ++x) col[w.local[x]] += from[x];
+        for (int x = y; x < blk.r;) {
+          const int e = w.run_end[x];
+          double* to = col + w.local[x];
+          for (int t = 0; t < e - x; ++t) to[t] += from[x + t];
+          x = e;
+        }
       }
     }
     if (first_child < w.blocks.size()) {
@@ -441,18 +450,12 @@ void ldlt_solve(const double* a, const int* iw, double* rhs) {
       }
     }
     for (int c = 0; c < p; ++c) y[idx[c]] = w[c];
-    for (int c = 0; c < p; ++c) {
-      if (kind[c] == 3) continue;
-      const double* col = L + static_cast<std::ptrdiff_t>(c) * m;
-      if (kind[c] == 1) {
-        const double wc = w[c];
-        for (int i = p; i < m; ++i) y[idx[i]] -= col[i] * wc;
-      } else {
-        const double* col2 = col + m;
-        const double w1 = w[c], w2 = w[c + 1];
-        for (int i = p; i < m; ++i) y[idx[i]] -= col[i] * w1 + col2[i] * w2;
-      }
-    }
+    // the rows below: y(idx[p:m]) -= L(p:m, 0:p) w, one dense product (a 2x2 block's two
+    // columns are L's columns like any other)
+    double* t = w + p;
+    std::fill(t, t + (m - p), 0.0);
+    column_update_max(m - p, p, L + p, m, w, t);
+    for (int i = p; i < m; ++i) y[idx[i]] += t[i - p];
   }
   // D, then Lᵀ x = z in reverse.
   for (int sn = nsn - 1; sn >= 0; --sn) {
@@ -472,12 +475,10 @@ void ldlt_solve(const double* a, const int* iw, double* rhs) {
         w[c + 1] = (d11 * b2 - d21 * b1) / det;
       }
     }
-    for (int c = 0; c < p; ++c) {
-      const double* col = L + static_cast<std::ptrdiff_t>(c) * m;
-      double acc = 0.0;
-      for (int i = p; i < m; ++i) acc += col[i] * y[idx[i]];
-      w[c] -= acc;
-    }
+    // w -= L(p:m, 0:p)ᵀ y(idx[p:m]), the rows below gathered once
+    double* g = w + p;
+    for (int i = p; i < m; ++i) g[i - p] = y[idx[i]];
+    transposed_update(m - p, p, L + p, m, g, w);
     for (int c = p - 1; c >= 0; --c) {
       const double* col = L + static_cast<std::ptrdiff_t>(c) * m;
       if (kind[c] == 1) {

@@ -8,8 +8,12 @@ namespace freeflex::detail {
 /// (within 4-column blocks) may be written too: callers keep only the lower triangle.
 void trapezoid_update(int rows, int cols, int p, const double* L, int ldl, const double* W, int ldw, double* C, int ldc);
 
-/// y -= A x: A rows x p, column major with leading dimension lda.
-void column_update(int rows, int p, const double* A, int lda, const double* x, double* y);
+/// y -= A x (A rows x p, column major with leading dimension lda), returning
+/// max_{1 <= i < rows} |y_i| (0 when rows < 2).
+double column_update_max(int rows, int p, const double* A, int lda, const double* x, double* y);
+
+/// y -= Aᵀ x: y_c -= Σ_i A(i, c) x_i for c < p, A rows x p as above.
+void transposed_update(int rows, int p, const double* A, int lda, const double* x, double* y);
 
 /// max_i |x_i| over n entries (0 when n <= 0).
 double max_abs(const double* x, int n);

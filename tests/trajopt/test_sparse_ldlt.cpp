@@ -12,6 +12,7 @@
 
 #include "trajopt/ma27_bridge.hpp"
 #include "trajopt/sparse_ldlt.hpp"
+#include "trajopt/sparse_ldlt_kernels.hpp"
 
 using namespace freeflex::detail;
 
@@ -195,4 +196,43 @@ TEST_CASE("sparse LDLT through MA27's interface, called as Ipopt calls it", "[tr
     ma27.cd(&n, a.data(), &la, iw.data(), &liw, w.data(), &maxfrt, x.data(), iw1c.data(), &nsteps, icntl, cntl);
     CHECK((m.dense * x - b).norm() < 1e-10 * (m.dense.norm() * x.norm()));  // round-off of a solve
   }
+}
+
+TEST_CASE("sparse LDLT kernels equal plain loops at every size and offset", "[trajopt][ldlt]") {
+  // The register-blocked kernels have a main path and remainders in rows and columns; each
+  // is compared with the definition at sizes 0 ... 21 (a block is 8 rows x 4 columns).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unif(-1.0, 1.0);
+  auto random = [&](int r, int c) {
+    Eigen::MatrixXd m(r, c);
+    for (int j = 0; j < c; ++j)
+      for (int i = 0; i < r; ++i) m(i, j) = unif(rng);
+    return m;
+  };
+  double worst = 0.0;
+  for (int rows = 0; rows <= 21; ++rows)
+    for (int p = 0; p <= 9; ++p) {
+      const Eigen::MatrixXd A = random(rows + 3, p), x = random(std::max(rows, p), 1);
+      // y -= A x and the largest |y_i|, i >= 1
+      Eigen::VectorXd y = random(rows, 1), ref = y - A.topRows(rows) * x.topRows(p);
+      const double g = column_update_max(rows, p, A.data(), static_cast<int>(A.rows()), x.data(), y.data());
+      worst = std::max(worst, rows ? (y - ref).cwiseAbs().maxCoeff() : 0.0);
+      CHECK(g == Approx(rows > 1 ? ref.tail(rows - 1).cwiseAbs().maxCoeff() : 0.0).margin(1e-14));
+      // y -= Aᵀ x
+      Eigen::VectorXd z = random(p, 1), zref = z - A.topRows(rows).transpose() * x.topRows(rows);
+      transposed_update(rows, p, A.data(), static_cast<int>(A.rows()), x.data(), z.data());
+      worst = std::max(worst, p ? (z - zref).cwiseAbs().maxCoeff() : 0.0);
+      // C -= L Wᵀ on the lower trapezoid
+      for (int cols = 0; cols <= std::min(rows, 9); ++cols) {
+        const Eigen::MatrixXd L = random(rows + 2, p), W = random(cols + 1, p);
+        Eigen::MatrixXd C = random(rows + 1, cols), Cref = C;
+        Cref.topRows(rows) -= L.topRows(rows) * W.topRows(cols).transpose();
+        trapezoid_update(rows, cols, p, L.data(), static_cast<int>(L.rows()), W.data(), static_cast<int>(W.rows()),
+                         C.data(), static_cast<int>(C.rows()));
+        for (int j = 0; j < cols; ++j)
+          for (int i = j; i <= rows; ++i) worst = std::max(worst, std::abs(C(i, j) - Cref(i, j)));
+      }
+    }
+  INFO("largest difference " << worst);
+  CHECK(worst < 1e-14);  // sums of at most 9 products of numbers below 1: rounding only, in another order
 }

@@ -74,7 +74,7 @@ class CollocationNlp {
       Eigen::MatrixXd xc, fc, Jc;    // HS compressed: nx x N, nx x N, nx x (nz N)
       Eigen::MatrixXd lam_eff, nu_eff;  // nx x P
       Eigen::MatrixXd D, Y, B;          // HS compressed: nx x q, nz x q, q x q
-      Eigen::MatrixXd Ya, Ha, HaYa;     // HS compressed: Y and H on the rows H can use
+      Eigen::MatrixXd Yr, Hsr, Hss, L, R;  // HS compressed: YᵀHY = Lᵀ R (collocation_hessian.cpp)
       ManeuverDynamics::Data dyn;
     } cache;
   };
@@ -239,7 +239,8 @@ class CollocationNlp {
   std::vector<std::vector<int>> smooth_slots_;  // [interval*nu + actuator][pair]
   std::vector<int> smooth_pair_i_, smooth_pair_j_;  // local control indices, i >= j
   std::vector<int> dense_act_, dense_trow_;
-  std::vector<int> h_rows_;                     // HS compressed: z-indices in the dynamics' Hessian pattern     // HS compressed: block entries that can be nonzero
+  std::vector<int> h_rows_;                     // HS compressed: z-indices in the dynamics' Hessian pattern
+  std::vector<int> h_cover_, h_rest_;           // h_rows_ split: a vertex cover of the pattern, the rest
   std::vector<std::vector<int>> dense_slots_;   // HS compressed: [interval], pairs of dense_act_
   std::vector<std::vector<int>> denseT_slots_;  // HS compressed: [interval], (T, dense_trow_), (T, T)
   int TT_slot_ = -1;
