@@ -303,7 +303,15 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readonly("max_defect", &TrajoptResult::max_defect)
       .def_readonly("t", &TrajoptResult::t)
       .def_readonly("x", &TrajoptResult::x)
-      .def_readonly("u", &TrajoptResult::u);
+      .def_readonly("u", &TrajoptResult::u)
+      .def_readonly("x_elastic", &TrajoptResult::x_elastic)
+      .def_readonly("terminal_vibration_energy_J", &TrajoptResult::terminal_vibration_energy_J)
+      .def_readonly("peak_tip_deflection_m", &TrajoptResult::peak_tip_deflection_m)
+      .def_readonly("control_energy", &TrajoptResult::control_energy)
+      .def_readonly("mode_frequencies", &TrajoptResult::mode_frequencies)
+      .def_readonly("max_interval_s", &TrajoptResult::max_interval_s)
+      .def_readonly("unresolved_modes", &TrajoptResult::unresolved_modes)
+      .def_property_readonly("unresolved_modes_message", [](const TrajoptResult& r) { return unresolved_modes_message(r); });
   py::class_<SuppressionResult>(m, "SuppressionResult")
       .def_property_readonly("ok", &SuppressionResult::ok)
       .def_readonly("message", &SuppressionResult::message)

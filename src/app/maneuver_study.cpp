@@ -102,6 +102,10 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     r.warnings.push_back("maneuver: " + r.chattering.message + "; " + r.chattering.remedy);
     if (study_log.warn) study_log.warn(r.warnings.back());
   }
+  if (!t.unresolved_modes.empty()) {
+    r.warnings.push_back("maneuver: " + unresolved_modes_message(t));
+    if (study_log.warn) study_log.warn(r.warnings.back());
+  }
   if (st.problem.elastic) {
     // The rigid optimum of the same objective: what the vibration-aware maneuver costs.
     if (log) *log << "maneuver: rigid counterpart (no elastic part) for comparison ... " << std::flush;
@@ -201,6 +205,12 @@ Json to_json(const ManeuverStudyResult& r) {
   if (t.x_elastic.cols() > 0) {
     Json e = Json::object();
     e["terminal_vibration_energy_J"] = t.terminal_vibration_energy_J;  // the optimizer's first-order model
+    e["mode_frequencies_rad_s"] = std::vector<double>(t.mode_frequencies.data(),
+                                                      t.mode_frequencies.data() + t.mode_frequencies.size());
+    e["max_interval_s"] = t.max_interval_s;
+    std::vector<int> unresolved;  // 1-based, as modes are numbered everywhere else
+    for (int j : t.unresolved_modes) unresolved.push_back(j + 1);
+    e["unresolved_modes"] = unresolved;
     e["peak_tip_deflection_m"] = t.peak_tip_deflection_m;              // at the collocation points
     e["control_energy_N2s"] = t.control_energy;  // ∫ uᵀ W u dt of the commands as flown
     if (r.rigid_optimum) {

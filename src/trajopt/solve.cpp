@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -95,6 +96,14 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
       res.x_elastic = res.trajectory->knot_states().rightCols(nlp.state_size() - 6);
       res.terminal_vibration_energy_J = nlp.terminal_vibration_energy(w);
       if (const ElasticDynamics* el = nlp.dynamics().elastic()) {
+        res.mode_frequencies = el->mode_frequencies();
+        res.max_interval_s = 0.0;
+        for (Eigen::Index k = 0; k + 1 < res.t.size(); ++k)
+          res.max_interval_s = std::max(res.max_interval_s, res.t(k + 1) - res.t(k));
+        res.unresolved_modes.clear();
+        for (Eigen::Index j = 0; j < res.mode_frequencies.size(); ++j)
+          if (res.mode_frequencies(j) * res.max_interval_s > TrajoptResult::max_resolved_omega_h)
+            res.unresolved_modes.push_back(static_cast<int>(j));
         res.peak_tip_deflection_m = 0.0;
         for (int j = 0; j < nlp.num_points(); ++j) {
           const auto q = w.segment(nlp.point_offset(j) + 6 + el->q_index(), el->n());
@@ -166,6 +175,32 @@ FlownManeuver flown_maneuver(const TrajoptResult& result, const ManeuverProblem&
   m.breakpoints.assign(knots.data(), knots.data() + knots.size());
   m.duration_s = result.duration_s;
   return m;
+}
+
+std::string unresolved_modes_message(const TrajoptResult& r) {
+  if (r.unresolved_modes.empty()) return "";
+  const int first = r.unresolved_modes.front(), last = r.unresolved_modes.back();
+  const double w0 = r.mode_frequencies(first), w1 = r.mode_frequencies(last), h = r.max_interval_s;
+  const double T = r.duration_s > 0.0 ? r.duration_s : h * std::max<Eigen::Index>(1, r.t.size() - 1);
+  const long long needed =
+      static_cast<long long>(std::ceil(T * w1 / TrajoptResult::max_resolved_omega_h - 1e-9));  // uniform mesh
+  std::ostringstream os;
+  os.precision(4);
+  os << "the mesh does not resolve elastic mode" << (first == last ? " " : "s ") << first + 1;
+  if (last != first) os << ".." << last + 1;
+  os << " of the problem (omega = " << w0;
+  if (last != first) os << " .. " << w1;
+  os << " rad/s, omega h = " << w0 * h;
+  if (last != first) os << " .. " << w1 * h;
+  os << " > " << TrajoptResult::max_resolved_omega_h << " with h = " << h
+     << " s): the collocation's version of such a mode oscillates at the wrong frequency, so the optimizer's terminal "
+        "vibration energy ("
+     << r.terminal_vibration_energy_J
+     << " J) does not describe that mode's true motion; a [simulation] of the full model measures the residual "
+        "vibration; ";
+  if (first > 0) os << "hold only the resolved modes (elastic_modes = " << first << ") or ";
+  os << "use at least " << needed << " intervals";
+  return os.str();
 }
 
 }  // namespace freeflex

@@ -14,6 +14,7 @@
 
 #include "freeflex/app/run.hpp"
 #include "freeflex/io/design.hpp"
+#include "support/cli.hpp"
 
 using namespace freeflex;
 using Catch::Contains;
@@ -63,7 +64,7 @@ TEST_CASE("a [simulation] given exactly its work runs as before, one unit less f
 
   // the last run (the perturbation solution's error estimate) is one unit short
   d.study_work = used - 1;
-  const std::string out = (std::filesystem::temp_directory_path() / "freeflex_test_work_budget").string();
+  const std::string out = freeflex_test::temp_path("work_budget");  // per process: concurrent test runs do not collide
   std::filesystem::remove_all(out);
   const RunResult cut = run_quietly(d, out);
   CHECK(cut.exit_code() == kExitNumericalFailure);

@@ -15,6 +15,7 @@
 #include "io/system_error.hpp"
 #include "support/designs.hpp"
 #include "support/files.hpp"
+#include "support/cli.hpp"
 
 using namespace freeflex;
 using namespace freeflex_test;
@@ -164,7 +165,7 @@ TEST_CASE("force elements and load profile times are bounded", "[io][issue20]") 
 }
 
 TEST_CASE("a figure's text is bounded and free of control characters", "[io][issue20]") {
-  const std::string dir = (std::filesystem::temp_directory_path() / "freeflex_test_plot_text").string();
+  const std::string dir = freeflex_test::temp_path("plot_text");  // per process: concurrent test runs do not collide
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   PlotSpec spec;
@@ -196,7 +197,7 @@ TEST_CASE("gnuplot runs under a time limit, and hitting it is a result, not a ha
   CHECK(missing.status == ProgramRun::Status::NotStarted);
   CHECK_THAT(missing.error, Contains("cannot run '/nonexistent/gnuplot': No such file or directory"));
 
-  const std::string dir = (std::filesystem::temp_directory_path() / "freeflex_test_plot_timeout").string();
+  const std::string dir = freeflex_test::temp_path("plot_timeout");  // per process: concurrent test runs do not collide
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const std::string fake = dir + "/stalling-gnuplot";

@@ -40,7 +40,7 @@ TEST_CASE("CSV rows use the shortest digits that read back to the same double, a
 }
 
 TEST_CASE("a file is replaced whole or not at all", "[io]") {
-  const std::string dir = (std::filesystem::temp_directory_path() / "freeflex_test_output").string();
+  const std::string dir = freeflex_test::temp_path("output");  // per process: concurrent test runs do not collide
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const std::string path = dir + "/r.csv";

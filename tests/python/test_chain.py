@@ -65,3 +65,31 @@ def test_example_script_makes_its_figure(tmp_path):
     assert p.returncode == 0, p.stderr
     assert png.stat().st_size > 10000
     assert "TV-LQR" in p.stdout
+
+
+def test_elastic_maneuver_names_the_modes_its_mesh_cannot_resolve(tmp_path):
+    """designs/slew_energy_at_rest.toml holds 2 modes on 200 intervals over 3 s (h = 15 ms,
+    omega_2 h = 0.93): resolved. Holding every coordinate of its NOA 6 model instead,
+    modes 4..6 (omega h = 3.0 .. 9.8) are not, and the run says so."""
+    text = (SOURCE / "designs" / "slew_energy_at_rest.toml").read_text()
+    text = text[: text.index("[simulation]")]  # the maneuver only
+    shipped = tmp_path / "shipped.toml"
+    shipped.write_text(text)
+    run = ff.run(ff.load_design(str(shipped)))
+    assert run.ok, run.message
+    r = run.maneuver.trajopt
+    assert len(r.mode_frequencies) == 2 and r.unresolved_modes == []
+    assert r.unresolved_modes_message == ""
+    assert r.x_elastic.shape[0] == len(r.t)
+    assert r.terminal_vibration_energy_J < 1e-20  # the optimizer's own model, at rest to round-off
+
+    held = tmp_path / "all.toml"
+    # (500 Ipopt iterations at most keep the larger problem within the work bound)
+    held.write_text(text.replace("elastic_modes = 2 ", 'max_iterations = 500\nelastic_modes = "all" '))
+    run = ff.run(ff.load_design(str(held)))
+    assert run.ok, run.message
+    r = run.maneuver.trajopt
+    assert len(r.mode_frequencies) == 6
+    assert r.unresolved_modes == [3, 4, 5]
+    assert "elastic_modes = 3" in r.unresolved_modes_message
+    assert any("does not resolve elastic modes 4..6" in w for w in run.warnings)

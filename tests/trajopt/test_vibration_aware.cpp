@@ -246,3 +246,35 @@ TEST_CASE("on the shipped designs' basis (NOA 6) the optimizer and the NLopt swi
   // used to keep; both methods now give 1.00079 s and 1.00086 s (docs/theory.md section 11)
   two_methods_agree(6);
 }
+
+TEST_CASE("modes the mesh cannot resolve are named, with the remedy", "[trajopt]") {
+  // designs/slew_energy_at_rest.toml (2 modes, 200 intervals over 3 s: omega_2 h = 0.93),
+  // then every coordinate of the NOA 4 model on 60 intervals: h = 0.05 s resolves mode 1
+  // (omega 22.4 rad/s, omega h = 1.1) and not the others (omega_2 h = 3.1).
+  const Design d = load_design(std::string(FREEFLEX_SOURCE_DIR) + "/designs/slew_energy_at_rest.toml");
+  const FlexibleBody shipped_body(Beam(d.beam), d.noa, d.force_elements(), d.damping_ratios);
+  const TrajoptResult shipped = solve_maneuver(shipped_body, d.maneuver->problem, d.maneuver->options);
+  REQUIRE(shipped.ok());
+  REQUIRE(shipped.mode_frequencies.size() == 2);
+  CHECK(shipped.mode_frequencies(1) * shipped.max_interval_s == Approx(61.68 * 0.015).epsilon(1e-3));
+  CHECK(shipped.unresolved_modes.empty());
+  CHECK(unresolved_modes_message(shipped).empty());
+
+  const FlexibleBody body(Beam(d.beam), 4, d.force_elements(), d.damping_ratios);
+  ManeuverProblem p = d.maneuver->problem;
+  p.elastic_modes = ManeuverProblem::all_modes;
+  TrajoptOptions o = d.maneuver->options;
+  o.intervals = 60;
+  const TrajoptResult coarse = solve_maneuver(body, p, o);
+  REQUIRE(coarse.ok());
+  REQUIRE(coarse.mode_frequencies.size() == 4);
+  CHECK(coarse.max_interval_s == Approx(0.05));
+  CHECK(coarse.unresolved_modes == std::vector<int>{1, 2, 3});
+  const std::string m = unresolved_modes_message(coarse);
+  INFO(m);
+  CHECK(m.find("modes 2..4") != std::string::npos);
+  CHECK(m.find("elastic_modes = 1") != std::string::npos);
+  // the highest mode needs h <= 2 / omega_4 over 3 s
+  const long long needed = static_cast<long long>(std::ceil(3.0 * coarse.mode_frequencies(3) / 2.0 - 1e-9));
+  CHECK(m.find("at least " + std::to_string(needed) + " intervals") != std::string::npos);
+}

@@ -79,6 +79,15 @@ struct TrajoptResult {
   /// largest |Φ q| at either end of the beam over the collocation points [m].
   double terminal_vibration_energy_J = 0.0;
   double peak_tip_deflection_m = 0.0;
+  /// With problem.elastic: ω_j [rad/s] of the elastic modes the problem holds (ascending),
+  /// the longest mesh interval h [s], and the modes (indices into mode_frequencies) that
+  /// the mesh does not resolve, ω_j h > max_resolved_omega_h: the collocation's version
+  /// of such a mode oscillates at the wrong frequency, so terminal_vibration_energy_J does
+  /// not describe that mode's true motion (docs/theory.md section 11, "Coordinates").
+  Eigen::VectorXd mode_frequencies;
+  double max_interval_s = 0.0;
+  std::vector<int> unresolved_modes;
+  static constexpr double max_resolved_omega_h = 2.0;
   /// ∫ uᵀ W u dt of the returned commands (W: the problem's energy_weights), whatever the
   /// objective; exact for the transcription's piecewise-polynomial controls.
   double control_energy = 0.0;
@@ -100,6 +109,10 @@ struct TrajoptResult {
 };
 
 TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& problem, const TrajoptOptions& options);
+
+/// What result.unresolved_modes means for the user, with the remedy (hold fewer modes or
+/// use a finer mesh); empty when every mode the problem holds is resolved.
+std::string unresolved_modes_message(const TrajoptResult& result);
 
 /// The solution flown open loop by the problem's actuators: its motion, commands (zero
 /// after the duration) and knots, for the perturbation solution and the controllers.
