@@ -310,7 +310,9 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readonly("control_energy", &TrajoptResult::control_energy)
       .def_readonly("mode_frequencies", &TrajoptResult::mode_frequencies)
       .def_readonly("max_interval_s", &TrajoptResult::max_interval_s)
-      .def_readonly("unresolved_modes", &TrajoptResult::unresolved_modes)
+      .def_readonly("unresolved_modes", &TrajoptResult::unresolved_modes,
+                    "0-based indices into mode_frequencies of the modes the mesh does not resolve (omega h > 2); "
+                    "summary.json and the messages number modes from 1")
       .def_property_readonly("unresolved_modes_message", [](const TrajoptResult& r) { return unresolved_modes_message(r); });
   py::class_<SuppressionResult>(m, "SuppressionResult")
       .def_property_readonly("ok", &SuppressionResult::ok)

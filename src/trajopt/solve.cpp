@@ -84,6 +84,9 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
     MeshRound mr;
     mr.intervals = nlp.intervals();
     mr.iterations = run.iterations;
+    res.mode_frequencies.resize(0);  // this round's, or none (no stale values from a round before)
+    res.max_interval_s = 0.0;
+    res.unresolved_modes.clear();
     if (run.w.size() == nlp.num_variables()) {
       const Eigen::VectorXd& w = run.w;
       res.objective = nlp.objective(w);
@@ -97,10 +100,8 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
       res.terminal_vibration_energy_J = nlp.terminal_vibration_energy(w);
       if (const ElasticDynamics* el = nlp.dynamics().elastic()) {
         res.mode_frequencies = el->mode_frequencies();
-        res.max_interval_s = 0.0;
         for (Eigen::Index k = 0; k + 1 < res.t.size(); ++k)
           res.max_interval_s = std::max(res.max_interval_s, res.t(k + 1) - res.t(k));
-        res.unresolved_modes.clear();
         for (Eigen::Index j = 0; j < res.mode_frequencies.size(); ++j)
           if (res.mode_frequencies(j) * res.max_interval_s > TrajoptResult::max_resolved_omega_h)
             res.unresolved_modes.push_back(static_cast<int>(j));
@@ -182,8 +183,9 @@ std::string unresolved_modes_message(const TrajoptResult& r) {
   const int first = r.unresolved_modes.front(), last = r.unresolved_modes.back();
   const double w0 = r.mode_frequencies(first), w1 = r.mode_frequencies(last), h = r.max_interval_s;
   const double T = r.duration_s > 0.0 ? r.duration_s : h * std::max<Eigen::Index>(1, r.t.size() - 1);
-  const long long needed =
-      static_cast<long long>(std::ceil(T * w1 / TrajoptResult::max_resolved_omega_h - 1e-9));  // uniform mesh
+  const double h_needed = TrajoptResult::max_resolved_omega_h / w1;
+  const long long needed = static_cast<long long>(std::ceil(T / h_needed - 1e-9));  // a uniform mesh
+  const int most = TrajoptOptions{}.max_intervals;
   std::ostringstream os;
   os.precision(4);
   os << "the mesh does not resolve elastic mode" << (first == last ? " " : "s ") << first + 1;
@@ -198,8 +200,22 @@ std::string unresolved_modes_message(const TrajoptResult& r) {
      << r.terminal_vibration_energy_J
      << " J) does not describe that mode's true motion; a [simulation] of the full model measures the residual "
         "vibration; ";
-  if (first > 0) os << "hold only the resolved modes (elastic_modes = " << first << ") or ";
-  os << "use at least " << needed << " intervals";
+  const bool finer = needed <= most;
+  if (first > 0)
+    os << "hold only the resolved modes (elastic_modes = " << first << ", modes_at_rest at most " << first << ")"
+       << (finer ? " or " : "");
+  if (finer)
+    os << "use a uniform mesh of at least " << needed << " intervals (h <= " << h_needed << " s)";
+  else if (first == 0) {
+    const double h1 = TrajoptResult::max_resolved_omega_h / w0;
+    const long long needed1 = static_cast<long long>(std::ceil(T / h1 - 1e-9));
+    if (needed1 <= most)
+      os << "hold fewer modes (elastic_modes = 1 needs a uniform mesh of at least " << needed1 << " intervals, h <= "
+         << h1 << " s)";
+    else
+      os << "no mesh within " << most << " intervals resolves mode 1 (h <= " << h1
+         << " s): leave the elastic part out";
+  }
   return os.str();
 }
 

@@ -232,15 +232,23 @@ struct Kernels {
   decltype(&max_abs_sse2) max_abs;
 };
 
+constexpr Kernels kPortable{update_sse2, column_max_sse2, transposed_sse2, max_abs_sse2};
+
 Kernels choose() {
   __builtin_cpu_init();
-  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return {update_avx2, column_max_avx2, transposed_avx2, max_abs_avx2};
-  return {update_sse2, column_max_sse2, transposed_sse2, max_abs_sse2};
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+    return {update_avx2, column_max_avx2, transposed_avx2, max_abs_avx2};
+  return kPortable;
 }
 
-const Kernels kernels = choose();
+Kernels kernels = choose();
 
 }  // namespace
+
+bool use_portable_ldlt_kernels(bool portable) {
+  kernels = portable ? kPortable : choose();
+  return kernels.update != kPortable.update;
+}
 
 double column_update_max(int rows, int p, const double* A, int lda, const double* x, double* y) {
   return rows > 0 ? kernels.column_max(rows, p, A, lda, x, y) : 0.0;

@@ -15,6 +15,10 @@ double column_update_max(int rows, int p, const double* A, int lda, const double
 /// y -= Aᵀ x: y_c -= Σ_i A(i, c) x_i for c < p, A rows x p as above.
 void transposed_update(int rows, int p, const double* A, int lda, const double* x, double* y);
 
+/// Tests only (not thread-safe): the SSE2 kernels everywhere (true), or the CPU's best
+/// again (false); returns whether the CPU's own (AVX2) kernels are now in use.
+bool use_portable_ldlt_kernels(bool portable);
+
 /// max_i |x_i| over n entries (0 when n <= 0).
 double max_abs(const double* x, int n);
 

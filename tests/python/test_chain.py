@@ -81,7 +81,9 @@ def test_elastic_maneuver_names_the_modes_its_mesh_cannot_resolve(tmp_path):
     assert len(r.mode_frequencies) == 2 and r.unresolved_modes == []
     assert r.unresolved_modes_message == ""
     assert r.x_elastic.shape[0] == len(r.t)
-    assert r.terminal_vibration_energy_J < 1e-20  # the optimizer's own model, at rest to round-off
+    # the optimizer's own model at rest: its rest constraints hold to Ipopt's constraint
+    # tolerance (1e-8), so at most about 1e-16 J (measured: 0 to 1e-55)
+    assert r.terminal_vibration_energy_J < 1e-14
 
     held = tmp_path / "all.toml"
     # (500 Ipopt iterations at most keep the larger problem within the work bound)

@@ -273,8 +273,24 @@ TEST_CASE("modes the mesh cannot resolve are named, with the remedy", "[trajopt]
   const std::string m = unresolved_modes_message(coarse);
   INFO(m);
   CHECK(m.find("modes 2..4") != std::string::npos);
-  CHECK(m.find("elastic_modes = 1") != std::string::npos);
+  CHECK(m.find("elastic_modes = 1, modes_at_rest at most 1") != std::string::npos);
   // the highest mode needs h <= 2 / omega_4 over 3 s
   const long long needed = static_cast<long long>(std::ceil(3.0 * coarse.mode_frequencies(3) / 2.0 - 1e-9));
-  CHECK(m.find("at least " + std::to_string(needed) + " intervals") != std::string::npos);
+  CHECK(m.find("uniform mesh of at least " + std::to_string(needed) + " intervals") != std::string::npos);
+  // no mode resolved, and mode 4 needs more than the 5000 intervals allowed (15 000 over
+  // 3 s): mode 1 alone on a finer mesh, or, when not even it fits, no elastic part
+  TrajoptResult none = coarse;
+  none.max_interval_s = 3.0;
+  none.unresolved_modes = {0, 1, 2, 3};
+  none.mode_frequencies(3) = 1e4;
+  const std::string m1 = unresolved_modes_message(none);
+  INFO(m1);
+  const long long needed1 = static_cast<long long>(std::ceil(3.0 * none.mode_frequencies(0) / 2.0 - 1e-9));
+  CHECK(m1.find("elastic_modes = 1 needs a uniform mesh of at least " + std::to_string(needed1) + " intervals") !=
+        std::string::npos);
+  none.mode_frequencies.setConstant(1e4);
+  const std::string m0 = unresolved_modes_message(none);
+  INFO(m0);
+  CHECK(m0.find("elastic_modes =") == std::string::npos);
+  CHECK(m0.find("no mesh within 5000 intervals resolves mode 1") != std::string::npos);
 }
