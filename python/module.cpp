@@ -455,10 +455,22 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readonly("message", &SuppressionStudyResult::message)
       .def_readonly("chain", &SuppressionStudyResult::chain)
       .def_readonly("cases", &SuppressionStudyResult::cases);
+  py::class_<ReplayCheck>(m, "ReplayCheck")
+      .def_readonly("ok", &ReplayCheck::ok)
+      .def_readonly("flagged", &ReplayCheck::flagged)
+      .def_readonly("message", &ReplayCheck::message)
+      .def_readonly("position_miss_m", &ReplayCheck::position_miss_m)
+      .def_readonly("theta_miss_rad", &ReplayCheck::theta_miss_rad)
+      .def_readonly("rate_miss", &ReplayCheck::rate_miss)
+      .def_readonly("position_scale_m", &ReplayCheck::position_scale_m)
+      .def_readonly("theta_scale_rad", &ReplayCheck::theta_scale_rad);
+  m.def("check_replay", &check_replay, py::arg("body"), py::arg("problem"), py::arg("result"),
+        "The optimized commands flown on the zero-order model against the optimizer's final state.");
   py::class_<ManeuverStudyResult>(m, "ManeuverStudyResult")
       .def_property_readonly("ok", &ManeuverStudyResult::ok)
       .def_readonly("message", &ManeuverStudyResult::message)
-      .def_readonly("trajopt", &ManeuverStudyResult::trajopt);
+      .def_readonly("trajopt", &ManeuverStudyResult::trajopt)
+      .def_readonly("replay", &ManeuverStudyResult::replay);
   py::class_<RunResult>(m, "RunResult")
       .def_property_readonly("ok", &RunResult::ok)
       .def_readonly("message", &RunResult::message)

@@ -102,6 +102,11 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     r.warnings.push_back("maneuver: " + r.chattering.message + "; " + r.chattering.remedy);
     if (study_log.warn) study_log.warn(r.warnings.back());
   }
+  r.replay = check_replay(body, st.problem, t);
+  if (!r.replay->ok || r.replay->flagged) {
+    r.warnings.push_back("maneuver: " + r.replay->message);
+    if (study_log.warn) study_log.warn(r.warnings.back());
+  }
   if (!t.unresolved_modes.empty()) {
     r.warnings.push_back("maneuver: " + unresolved_modes_message(t));
     if (study_log.warn) study_log.warn(r.warnings.back());
@@ -201,6 +206,19 @@ Json to_json(const ManeuverStudyResult& r) {
                                                            r.chattering.suggested_rate_limit.size());
     }
     j["chattering"] = c;
+  }
+  if (r.replay) {
+    const ReplayCheck& rc = *r.replay;
+    Json c = Json::object();
+    c["ok"] = rc.ok;
+    c["flagged"] = rc.flagged;
+    if (rc.ok) {
+      c["position_miss_m"] = rc.position_miss_m;
+      c["theta_miss_rad"] = rc.theta_miss_rad;
+      c["rate_miss"] = rc.rate_miss;
+    }
+    if (!rc.message.empty()) c["message"] = rc.message;
+    j["replay"] = c;
   }
   if (t.x_elastic.cols() > 0) {
     Json e = Json::object();

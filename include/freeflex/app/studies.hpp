@@ -17,6 +17,7 @@
 #include "freeflex/enum_names.hpp"
 #include "freeflex/io/design.hpp"
 #include "freeflex/trajopt/chattering.hpp"
+#include "freeflex/trajopt/replay.hpp"
 #include "freeflex/trajopt/solve.hpp"
 
 namespace freeflex {
@@ -98,6 +99,9 @@ struct ManeuverStudyResult {
   std::optional<FlownManeuver> flown;  ///< when solved: what [simulation] and [controller] fly
   /// When solved: chattering of the controls (a singular arc), with suggested remedies.
   ChatteringReport chattering;
+  /// When solved: the commands flown on the zero-order model against the optimizer's
+  /// final state (trajopt/replay.hpp).
+  std::optional<ReplayCheck> replay;
   /// With an elastic maneuver: the rigid counterpart of its problem (trajopt/problem.hpp)
   /// solved with the same options, for the extra control energy and the suppression
   /// comparison; and, when that solved, what it flies.
