@@ -217,11 +217,14 @@ Json to_json(const Design& design, const SweepStudyResult& r) {
   j["parameters"] = params;
   j["requirement_energy_J"] = sw.requirement_energy_J;
   j["fraction_meeting_requirement"] = r.fraction_meeting;
+  // the sampling's own uncertainty: 95% intervals (wilson_interval, quantile_interval)
+  j["fraction_meeting_requirement_ci95"] = std::vector<double>{r.fraction_meeting_low, r.fraction_meeting_high};
   Json e = Json::object();
   e["mean"] = r.mean_J;
   e["p05"] = r.p05_J;
   e["p50"] = r.p50_J;
   e["p95"] = r.p95_J;
+  if (std::isfinite(r.p95_low_J)) e["p95_ci95"] = std::vector<double>{r.p95_low_J, r.p95_high_J};
   e["worst"] = r.worst_J;
   j["residual_vibration_energy_J"] = e;
   j["threads"] = r.threads;

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 
 #include "app/sweep_files.hpp"
 #include "freeflex/io/output.hpp"
@@ -307,6 +308,24 @@ void validate(const SweepExecution& e) {
   if (e.ranks > 1 && !e.gather) throw std::invalid_argument("sweep execution: ranks > 1 needs a gather function");
 }
 
+std::pair<double, double> wilson_interval(long successes, long n, double z) {
+  if (n <= 0) return {0.0, 1.0};
+  const double nn = static_cast<double>(n), p = static_cast<double>(successes) / nn, z2 = z * z;
+  const double centre = (p + z2 / (2.0 * nn)) / (1.0 + z2 / nn);
+  const double half = z / (1.0 + z2 / nn) * std::sqrt(p * (1.0 - p) / nn + z2 / (4.0 * nn * nn));
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
+std::pair<double, double> quantile_interval(const std::vector<double>& sorted, double q, double z) {
+  const double n = static_cast<double>(sorted.size()), spread = n * q * (1.0 - q);
+  if (spread < 5.0) return {std::nan(""), std::nan("")};
+  const double half = z * std::sqrt(spread);
+  // 1-based ranks, clamped to the sample
+  const long lo = std::max(1L, static_cast<long>(std::floor(n * q - half)));
+  const long hi = std::min(static_cast<long>(sorted.size()), static_cast<long>(std::ceil(n * q + half)));
+  return {sorted[static_cast<std::size_t>(lo - 1)], sorted[static_cast<std::size_t>(hi - 1)]};
+}
+
 SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyResult& suppression,
                                  const ManeuverStudyResult* maneuver, const SweepExecution& ex, const StudyLog& log) {
   validate(ex);
@@ -484,6 +503,8 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
   r.p95_J = percentile(sorted, 0.95);
   r.worst_J = sorted.empty() ? std::nan("") : sorted.back();
   r.fraction_meeting = static_cast<double>(meeting) / static_cast<double>(total);
+  std::tie(r.fraction_meeting_low, r.fraction_meeting_high) = wilson_interval(meeting, total);
+  std::tie(r.p95_low_J, r.p95_high_J) = quantile_interval(sorted, 0.95);
   if (r.failed > 0)
     fail("[sweep]: " + std::to_string(r.failed) + " of " + std::to_string(total) + " samples failed" +
          (out_of_work > 0 ? "; " + std::to_string(out_of_work.load()) + " of them spent their share of the sweep's work "
@@ -494,7 +515,9 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
   if (log.log)
     *log.log << "  residual vibration energy [J]: mean " << std::setprecision(4) << r.mean_J << ", p5 " << r.p05_J
              << ", median " << r.p50_J << ", p95 " << r.p95_J << ", worst " << r.worst_J << "; meeting <= "
-             << sw.requirement_energy_J << " J: " << r.fraction_meeting * 100.0 << "%\n";
+             << sw.requirement_energy_J << " J: " << r.fraction_meeting * 100.0 << "% (95% confidence "
+             << r.fraction_meeting_low * 100.0 << " .. " << r.fraction_meeting_high * 100.0 << "% from "
+             << total << " samples)\n";
   return r;
 }
 

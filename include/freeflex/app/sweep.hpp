@@ -12,6 +12,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -86,6 +87,12 @@ struct SweepStudyResult {
   /// Residual vibration energy of the completed samples [J].
   double mean_J = 0.0, p05_J = 0.0, p50_J = 0.0, p95_J = 0.0, worst_J = 0.0;
   double fraction_meeting = 0.0;  ///< of all samples (a failed one does not meet it)
+  /// What the sampling alone leaves uncertain, 95% confidence intervals (as for
+  /// independent draws; conservative with grid parameters): Wilson's score interval of
+  /// fraction_meeting, and the distribution-free interval of p95_J from the order
+  /// statistics (NaN when fewer than n q (1 − q) >= 5 allows: 106 completed samples).
+  double fraction_meeting_low = 0.0, fraction_meeting_high = 1.0;
+  double p95_low_J = 0.0, p95_high_J = 0.0;
   int threads = 1, ranks = 1;
   double wall_time_s = 0.0;         ///< flying this process's samples
   double time_per_sample_s = 0.0;   ///< wall time / samples flown here (threads and ranks included)
@@ -101,5 +108,15 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
 /// The parameter values of sample `index` (one per parameter, in order): grid
 /// parameters from index / samples, the others drawn from (seed, index).
 std::vector<double> sweep_sample_values(const SweepStudy& sweep, long index);
+
+/// Wilson's score interval [low, high] of a proportion: `successes` of `n` independent
+/// trials, z the normal quantile (1.96: 95%). n = 0 gives [0, 1].
+std::pair<double, double> wilson_interval(long successes, long n, double z = 1.959963984540054);
+
+/// Distribution-free interval of the q-quantile of the population a sorted sample came
+/// from: the order statistics at ranks n q ∓ z sqrt(n q (1 − q)) (the normal approximation
+/// to the binomial rank); NaN, NaN when n q (1 − q) < 5.
+std::pair<double, double> quantile_interval(const std::vector<double>& sorted, double q,
+                                            double z = 1.959963984540054);
 
 }  // namespace freeflex
