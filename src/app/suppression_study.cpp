@@ -223,7 +223,37 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   };
   // A vibration-aware maneuver is compared with its rigid optimum, both with TV-LQR.
   const bool vibration_aware = maneuver && maneuver->rigid_optimum;
+  const std::size_t main_first = r.cases.size();
   if (!add_cases(chain, problem, vibration_aware ? "vibration_aware_" : "")) return r;
+  const std::size_t main_end = r.cases.size();
+  // The same chain at 10x tighter tolerances: how far its energies are from converged.
+  std::optional<SuppressionResult> tight;
+  if (!st.error_estimate) {
+    // not asked for
+  } else if (budget->exhausted()) {
+    not_run.push_back("the error estimate (the chain at 10x tighter tolerances)");
+  } else {
+    SuppressionOptions o = options;
+    o.simulation.integrator.rtol /= 10.0;
+    o.simulation.integrator.atol /= 10.0;
+    o.tvlqr.rtol /= 10.0;
+    o.tvlqr.atol /= 10.0;
+    o.closed_loop.rtol /= 10.0;
+    o.closed_loop.atol /= 10.0;
+    o.closed_loop_gauss_steps = std::min(2 * o.closed_loop_gauss_steps, 1000);  // the key's bound
+    if (log) *log << "suppression: the same chain at 10x tighter tolerances, for the error estimate ... " << std::flush;
+    tight = suppress_vibration(body, problem, o);
+    if (log) *log << (tight->status == Status::Solved ? "done\n" : "did not complete: " + tight->message + "\n");
+    if (tight->status != Status::Solved) {
+      if (budget->exhausted()) {
+        not_run.push_back("the error estimate (the chain at 10x tighter tolerances, stopped)");
+      } else {
+        r.warnings.push_back("suppression: no error estimate: the chain at 10x tighter tolerances did not complete: " +
+                             tight->message);
+        if (study_log.warn) study_log.warn(r.warnings.back());
+      }
+    }
+  }
   if (vibration_aware && !maneuver->rigid_flown)
     fail("the rigid counterpart of the maneuver did not solve: no rigid_optimum rows");
   if (vibration_aware && maneuver->rigid_flown && budget->exhausted()) not_run.push_back("the rigid optimum's chain");
@@ -251,6 +281,41 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   targets.R_target = end.pos.head<2>();
   targets.theta_target = end.pos(2);
   for (auto& c : r.cases) c.metrics = response_metrics(body, c.t, c.z, c.z_dot, c.commands, targets);
+  if (tight && tight->status == Status::Solved) {
+    const Excitation ex = problem.maneuver ? problem.maneuver->driving(problem.loads) : problem.loads;
+    for (std::size_t i = main_first; i < main_end; ++i) {
+      SuppressionStudyResult::Case& c = r.cases[i];
+      const bool nonlinear = c.model == "nonlinear";
+      const bool closed = c.name.size() >= 5 && c.name.compare(c.name.size() - 5, 5, "tvlqr") == 0;
+      Eigen::VectorXd t;
+      Eigen::MatrixXd z, zd, cmd;
+      if (!closed) {
+        if (nonlinear)
+          t = tight->open_loop_full.t, z = tight->open_loop_full.z, zd = tight->open_loop_full.z_dot;
+        else
+          t = tight->open_loop_first_order.total.t, z = tight->open_loop_first_order.total.z,
+          zd = tight->open_loop_first_order.total.z_dot;
+        cmd = element_commands(ex, ne, t, {}, nullptr);
+      } else {
+        const ClosedLoopResult& cl = nonlinear ? tight->closed_loop_full : tight->closed_loop_first_order;
+        if (!cl.ok()) continue;
+        t = cl.t, z = cl.z, zd = cl.z_dot;
+        cmd = element_commands(problem.loads, ne, t, st.actuators, &cl.commands);
+      }
+      const ResponseMetrics m = response_metrics(body, t, z, zd, cmd, targets);
+      c.energy_error_estimate_J = std::abs(m.residual_vibration_energy_J - c.metrics.residual_vibration_energy_J);
+      // a tenth of the value, and above round-off of the open loop's energy scale
+      if (c.energy_error_estimate_J > 0.1 * c.metrics.residual_vibration_energy_J) {
+        std::ostringstream os;
+        os << "suppression: the " << c.name << " (" << c.model << ") residual vibration energy "
+           << c.metrics.residual_vibration_energy_J << " J moves by " << c.energy_error_estimate_J
+           << " J at 10x tighter tolerances: not converged; tighten [simulation] rtol/atol or "
+              "[controller] closed_loop_rtol/closed_loop_atol";
+        r.warnings.push_back(os.str());
+        if (study_log.warn) study_log.warn(r.warnings.back());
+      }
+    }
+  }
   if (log) {
     *log << "  case          model         E_vib(end) [J]  mean, last 1 s [J]   peak tip [m]   effort [N^2 s]\n";
     for (const auto& c : r.cases) {
@@ -406,6 +471,8 @@ Json to_json(const Design& design, const SuppressionStudyResult& r) {
     row["case"] = c.name;
     row["model"] = c.model;
     row["residual_vibration_energy_J"] = m.residual_vibration_energy_J;
+    if (std::isfinite(c.energy_error_estimate_J))
+      row["residual_vibration_energy_error_estimate_J"] = c.energy_error_estimate_J;  // 10x tighter tolerances
     row["peak_tip_deflection_m"] = m.peak_tip_deflection_m;
     row["tip_settling_time_s"] = m.tip_settling_time_s;
     row["final_attitude_error_rad"] = m.final_attitude_error_rad;

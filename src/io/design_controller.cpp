@@ -94,6 +94,7 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
   st.tvlqr_method = c.enumerated<TvlqrOptions::Method>("tvlqr_method", false).value_or(st.tvlqr_method);
   auto gauss_steps = c.integer("closed_loop_gauss_steps", 1, 1000, false);
   st.closed_loop_gauss_steps = static_cast<int>(gauss_steps.value_or(st.closed_loop_gauss_steps));
+  st.error_estimate = c.boolean("error_estimate", false).value_or(st.error_estimate);
   c.finish();
   outputs.named(c, "figure", st.figure, {".gp", ".png"});
   outputs.named(c, "figure", st.figure + "_commands", {".gp", ".png"});

@@ -5,6 +5,7 @@
 // out. The budgets are lowered here so that spending them is cheap.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -108,11 +109,17 @@ TEST_CASE("the [controller] study's budget covers its chain and its bang-bang de
   REQUIRE(cut.suppression->bang_bang.size() == 2);
   CHECK_THAT(cut.suppression->bang_bang[1].status, Contains("not designed: the [controller] study's work budget"));
 
-  // less than the chain's: the Riccati sweep or a run before it stops, with its time
-  d.study_work = chain_work / 2;
+  // less than the chain's (chain_work holds it twice: its error estimate runs it again
+  // at tighter tolerances): the Riccati sweep or a run before it stops, with its time
+  d.study_work = chain_work / 4;
   const RunResult half = run_quietly(d);
   CHECK(half.exit_code() == kExitNumericalFailure);
   CHECK_THAT(half.message, Contains("stopped at t = ") && Contains("the [controller] study's work budget"));
+  // enough for the chain, not for its error estimate: said so
+  d.study_work = chain_work * 2 / 3;
+  const RunResult no_estimate = run_quietly(d);
+  CHECK(no_estimate.exit_code() == kExitNumericalFailure);
+  CHECK_THAT(no_estimate.message, Contains("not run: the error estimate (the chain at 10x tighter tolerances, stopped)"));
 }
 
 TEST_CASE("a sweep's samples share its budget equally, each charged on its own", "[app][issue20]") {
@@ -138,15 +145,16 @@ TEST_CASE("a sweep's samples share its budget equally, each charged on its own",
 TEST_CASE("the [lqg] study's filter, digital law and flights share one budget", "[app][issue20]") {
   std::string text = text_of(std::string(FREEFLEX_SOURCE_DIR) + "/tests/data/sweep_small.toml");
   text = text.substr(0, text.find("[sweep]")) +
-         "[[sensor]]\nname = \"gyro\"\ntype = \"gyro_attitude\"\nnoise_density = 1e-5\n[lqg]\nsample_rate_hz = 1000\n";
+         "[[sensor]]\nname = \"gyro\"\ntype = \"gyro_attitude\"\nnoise_density = 1e-5\n[lqg]\nsample_rate_hz = 2000\n";
   Design d = parse_design(text, "lqg_small.toml");
   const RunResult full = run_quietly(d);
   REQUIRE(full.ok());
   REQUIRE(full.lqg);
   const long long used = full.lqg->work_units;
   CHECK(full.lqg->work_budget_units == design_limits::kMaxStudyWork);
-  // the filter's discretization alone (n³ a step of its matrix equations) outweighs the
-  // [controller] study here: a budget that covers the latter stops the former
+  // the filter's discretization at 2 kHz (n³ a step of its matrix equations) outweighs the
+  // [controller] study here (its chain and the chain's error estimate): a budget that
+  // covers the latter stops the former
   REQUIRE(used > full.suppression->work_units);
   d.study_work = full.suppression->work_units;
   const RunResult cut = run_quietly(d);
@@ -155,4 +163,45 @@ TEST_CASE("the [lqg] study's filter, digital law and flights share one budget", 
   CHECK_THAT(cut.message, Contains("[lqg]: ") && Contains("stopped at t = ") &&
                               Contains("the [lqg] study's work budget of "));
   CHECK(cut.lqg->work_units <= d.study_work);  // never overspent
+}
+
+TEST_CASE("each suppression case estimates its energy's error, and a loose tolerance is said to be", "[app]") {
+  // designs/suppress_moment_pulse.toml's chain (the bang-bang rows left out): every row of
+  // the chain gets the change of its residual energy when the chain runs again at 10x
+  // tighter tolerances; with closed_loop_rtol = 1e-3 the closed loops are not converged.
+  Design d = shipped("suppress_moment_pulse");
+  d.bang_bang.reset();
+  const RunResult good = run_quietly(d);
+  REQUIRE(good.ok());
+  REQUIRE(good.suppression->cases.size() == 4);
+  for (const auto& c : good.suppression->cases) {
+    INFO(c.name << " " << c.model << ": " << c.metrics.residual_vibration_energy_J << " J, estimate "
+                << c.energy_error_estimate_J);
+    REQUIRE(std::isfinite(c.energy_error_estimate_J));
+    CHECK(c.energy_error_estimate_J < 1e-3 * c.metrics.residual_vibration_energy_J);  // converged (measured < 1e-5)
+  }
+  for (const auto& w : good.warnings) CHECK_THAT(w, !Contains("not converged"));
+  // switched off in the design: no estimate, half the work
+  std::string text = text_of(std::string(FREEFLEX_SOURCE_DIR) + "/designs/suppress_moment_pulse.toml");
+  text.replace(text.find("[controller]\n"), 13, "[controller]\nerror_estimate = false\n");
+  Design off = parse_design(text, "no_estimate.toml");
+  off.bang_bang.reset();
+  off.plots = false;
+  REQUIRE(!off.controller->error_estimate);
+  const RunResult quick = run_quietly(off);
+  REQUIRE(quick.ok());
+  for (const auto& c : quick.suppression->cases) CHECK(std::isnan(c.energy_error_estimate_J));
+  CHECK(quick.suppression->work_units < good.suppression->work_units / 2);  // the second chain is dearer
+
+  d.controller->closed_loop_rtol = 1e-3;
+  d.controller->closed_loop_atol = 1e-3;
+  const RunResult loose = run_quietly(d);
+  REQUIRE(loose.suppression);
+  const auto& tv = loose.suppression->cases[3];
+  REQUIRE(tv.name == "tvlqr");
+  INFO(tv.metrics.residual_vibration_energy_J << " J, estimate " << tv.energy_error_estimate_J);
+  CHECK(tv.energy_error_estimate_J > 0.1 * tv.metrics.residual_vibration_energy_J);
+  bool said = false;
+  for (const auto& w : loose.warnings) said = said || w.find("tvlqr (nonlinear) residual vibration energy") != std::string::npos;
+  CHECK(said);
 }

@@ -4,6 +4,7 @@
 // They compute and report progress; the command line writes their files and
 // summary.json from the results (app/run.hpp).
 #include <functional>
+#include <limits>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -191,6 +192,11 @@ struct SuppressionStudyResult {
     Eigen::MatrixXd z, z_dot, commands;  ///< commands: every element (loads and actuators)
     double saturated_fraction = 0.0;
     ResponseMetrics metrics;
+    /// The residual vibration energy's change when the chain (open loop, TV-LQR, closed
+    /// loops) runs again at 10x tighter tolerances (twice the Gauss steps): an estimate of
+    /// its error [J]; NaN when not estimated (rigid-optimum and bang-bang rows, a spent
+    /// work budget).
+    double energy_error_estimate_J = std::numeric_limits<double>::quiet_NaN();
   };
   std::vector<Case> cases;
   /// Work its integrations were charged (WorkBudget units) of its budget, Design::study_work.

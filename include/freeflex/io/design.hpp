@@ -206,6 +206,9 @@ struct ControllerStudy {
   /// How the first-order closed loop is integrated (ClosedLoopOptions).
   ClosedLoopMethod closed_loop_first_order_method = ClosedLoopMethod::Cvodes;
   int closed_loop_gauss_steps = ClosedLoopOptions{}.gauss_steps;
+  /// Run the chain again at 10x tighter tolerances (twice the Gauss steps) and report each
+  /// case's energy change as its error estimate (SuppressionStudyResult::Case).
+  bool error_estimate = true;
   /// How the TV-LQR's Riccati equation is integrated (TvlqrOptions::method).
   TvlqrOptions::Method tvlqr_method = TvlqrOptions::Method::Auto;
 };
