@@ -197,34 +197,38 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     r.message = chain.message;
     return r;
   }
-  // The cases of one chain: its open loop and its closed loops, names prefixed.
-  auto add_cases = [&](const SuppressionResult& ch, const SuppressionProblem& pr, const std::string& prefix) {
+  // The cases of one chain: its open loop and its closed loops, names prefixed, appended to
+  // `to`; the chain's failures are the study's when `report`.
+  using Case = SuppressionStudyResult::Case;
+  auto chain_cases = [&](const SuppressionResult& ch, const SuppressionProblem& pr, const std::string& prefix,
+                         std::vector<Case>& to, bool report) {
     const Excitation nominal_ex = pr.maneuver ? pr.maneuver->driving(pr.loads) : pr.loads;
     const PerturbationResult& pert = ch.open_loop_first_order;
     const SimulationResult& full = ch.open_loop_full;
-    r.cases.push_back({prefix + "open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
-                       element_commands(nominal_ex, ne, pert.total.t, {}, nullptr), 0.0, {}});
-    r.cases.push_back({prefix + "open_loop", "nonlinear", full.t, full.z, full.z_dot,
-                       element_commands(nominal_ex, ne, full.t, {}, nullptr), 0.0, {}});
+    to.push_back({prefix + "open_loop", "first_order", pert.total.t, pert.total.z, pert.total.z_dot,
+                  element_commands(nominal_ex, ne, pert.total.t, {}, nullptr), 0.0, {}});
+    to.push_back({prefix + "open_loop", "nonlinear", full.t, full.z, full.z_dot,
+                  element_commands(nominal_ex, ne, full.t, {}, nullptr), 0.0, {}});
     if (ch.status == Status::TvlqrFailed) {
-      fail(prefix + ch.message);
+      if (report) fail(prefix + ch.message);
       return false;
     }
     for (const ClosedLoopResult* c : {&ch.closed_loop_first_order, &ch.closed_loop_full}) {
       if (!c->ok()) {
-        fail(prefix + "closed-loop simulation failed: " + c->message);
+        if (report) fail(prefix + "closed-loop simulation failed: " + c->message);
         continue;
       }
-      r.cases.push_back({prefix + "tvlqr", c == &ch.closed_loop_first_order ? "first_order" : "nonlinear", c->t, c->z,
-                         c->z_dot, element_commands(pr.loads, ne, c->t, st.actuators, &c->commands),
-                         c->saturated_fraction, {}});
+      to.push_back({prefix + "tvlqr", c == &ch.closed_loop_first_order ? "first_order" : "nonlinear", c->t, c->z,
+                    c->z_dot, element_commands(pr.loads, ne, c->t, st.actuators, &c->commands), c->saturated_fraction,
+                    {}});
     }
     return true;
   };
   // A vibration-aware maneuver is compared with its rigid optimum, both with TV-LQR.
   const bool vibration_aware = maneuver && maneuver->rigid_optimum;
+  const std::string main_prefix = vibration_aware ? "vibration_aware_" : "";
   const std::size_t main_first = r.cases.size();
-  if (!add_cases(chain, problem, vibration_aware ? "vibration_aware_" : "")) return r;
+  if (!chain_cases(chain, problem, main_prefix, r.cases, true)) return r;
   const std::size_t main_end = r.cases.size();
   // The same chain at 10x tighter tolerances: how far its energies are from converged.
   std::optional<SuppressionResult> tight;
@@ -265,7 +269,7 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     if (r.rigid_chain->status == Status::HorizonTooShort || r.rigid_chain->status == Status::OpenLoopFailed)
       fail("rigid optimum: " + r.rigid_chain->message);
     else
-      add_cases(*r.rigid_chain, rp, "rigid_optimum_");
+      chain_cases(*r.rigid_chain, rp, "rigid_optimum_", r.cases, true);
   }
   if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log, not_run);
   if (!not_run.empty()) {
@@ -286,29 +290,16 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     // accuracy: their changes are not a convergence question
     double floor = 0.0;
     for (std::size_t i = main_first; i < main_end; ++i)
-      if (r.cases[i].name.size() >= 9 && r.cases[i].name.compare(r.cases[i].name.size() - 9, 9, "open_loop") == 0)
+      if (r.cases[i].name == main_prefix + "open_loop")
         floor = std::max(floor, 1e-10 * r.cases[i].metrics.residual_vibration_energy_J);
-    const Excitation ex = problem.maneuver ? problem.maneuver->driving(problem.loads) : problem.loads;
+    std::vector<Case> again;  // the same cases from the tighter chain
+    chain_cases(*tight, problem, main_prefix, again, false);
     for (std::size_t i = main_first; i < main_end; ++i) {
-      SuppressionStudyResult::Case& c = r.cases[i];
-      const bool nonlinear = c.model == "nonlinear";
-      const bool closed = c.name.size() >= 5 && c.name.compare(c.name.size() - 5, 5, "tvlqr") == 0;
-      Eigen::VectorXd t;
-      Eigen::MatrixXd z, zd, cmd;
-      if (!closed) {
-        if (nonlinear)
-          t = tight->open_loop_full.t, z = tight->open_loop_full.z, zd = tight->open_loop_full.z_dot;
-        else
-          t = tight->open_loop_first_order.total.t, z = tight->open_loop_first_order.total.z,
-          zd = tight->open_loop_first_order.total.z_dot;
-        cmd = element_commands(ex, ne, t, {}, nullptr);
-      } else {
-        const ClosedLoopResult& cl = nonlinear ? tight->closed_loop_full : tight->closed_loop_first_order;
-        if (!cl.ok()) continue;
-        t = cl.t, z = cl.z, zd = cl.z_dot;
-        cmd = element_commands(problem.loads, ne, t, st.actuators, &cl.commands);
-      }
-      const ResponseMetrics m = response_metrics(body, t, z, zd, cmd, targets);
+      Case& c = r.cases[i];
+      const auto twin = std::find_if(again.begin(), again.end(),
+                                     [&](const Case& a) { return a.name == c.name && a.model == c.model; });
+      if (twin == again.end()) continue;  // its closed loop failed at the tighter tolerances
+      const ResponseMetrics m = response_metrics(body, twin->t, twin->z, twin->z_dot, twin->commands, targets);
       c.energy_error_estimate_J = std::abs(m.residual_vibration_energy_J - c.metrics.residual_vibration_energy_J);
       if (c.energy_error_estimate_J > 0.1 * c.metrics.residual_vibration_energy_J && c.energy_error_estimate_J > floor) {
         std::ostringstream os;

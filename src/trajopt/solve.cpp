@@ -183,8 +183,11 @@ std::string unresolved_modes_message(const TrajoptResult& r) {
   const int first = r.unresolved_modes.front(), last = r.unresolved_modes.back();
   const double w0 = r.mode_frequencies(first), w1 = r.mode_frequencies(last), h = r.max_interval_s;
   const double T = r.duration_s > 0.0 ? r.duration_s : h * std::max<Eigen::Index>(1, r.t.size() - 1);
-  const double h_needed = TrajoptResult::max_resolved_omega_h / w1;
-  const long long needed = static_cast<long long>(std::ceil(T / h_needed - 1e-9));  // a uniform mesh
+  // the longest interval that resolves omega, and the uniform mesh over T it takes
+  auto h_for = [](double omega) { return TrajoptResult::max_resolved_omega_h / omega; };
+  auto intervals_for = [&](double omega) { return static_cast<long long>(std::ceil(T / h_for(omega) - 1e-9)); };
+  const double h_needed = h_for(w1);
+  const long long needed = intervals_for(w1);
   const int most = TrajoptOptions{}.max_intervals;
   std::ostringstream os;
   os.precision(4);
@@ -207,8 +210,8 @@ std::string unresolved_modes_message(const TrajoptResult& r) {
   if (finer)
     os << "use a uniform mesh of at least " << needed << " intervals (h <= " << h_needed << " s)";
   else if (first == 0) {
-    const double h1 = TrajoptResult::max_resolved_omega_h / w0;
-    const long long needed1 = static_cast<long long>(std::ceil(T / h1 - 1e-9));
+    const double h1 = h_for(w0);
+    const long long needed1 = intervals_for(w0);
     if (needed1 <= most)
       os << "hold fewer modes (elastic_modes = 1 needs a uniform mesh of at least " << needed1 << " intervals, h <= "
          << h1 << " s)";
