@@ -408,7 +408,7 @@ TEST_CASE("a mesh too coarse for the rigid motion is flagged by flying its comma
   REQUIRE(c.ok);
   CHECK(c.flagged);
   CHECK(c.position_miss_m > 0.01 * c.position_scale_m);
-  CHECK(c.position_scale_m == Approx(std::hypot(1.0, 0.5)));
+  CHECK(c.position_scale_m == Approx(std::hypot(1.0, 0.5)));  // the move, reached to Ipopt's tolerance
   CHECK_THAT(c.message, Catch::Contains("does not resolve the rigid motion"));
   // the miss is the integration of the same commands: check it against replay_open_loop
   IntegratorOptions io;
@@ -418,7 +418,7 @@ TEST_CASE("a mesh too coarse for the rigid motion is flagged by flying its comma
   REQUIRE(ir.ok());
   const Eigen::RowVectorXd end = ir.x.bottomRows(1);
   CHECK(c.position_miss_m ==
-        Approx((end.head<2>() - coarse.x.bottomRows(1).leftCols<2>()).norm()).epsilon(1e-12));
+        Approx((end.head<2>() - coarse.x.bottomRows(1).leftCols<2>()).norm()).epsilon(1e-12));  // the same integration
 
   o.transcription = Transcription::HermiteSimpson;
   o.intervals = 100;
