@@ -224,6 +224,7 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("intervals", &TrajoptOptions::intervals)
       .def_readwrite("tol", &TrajoptOptions::tol)
       .def_readwrite("max_iter", &TrajoptOptions::max_iter)
+      .def_readwrite("rigid_warm_start", &TrajoptOptions::rigid_warm_start)
       .def_readwrite("verbose", &TrajoptOptions::verbose)
       .def_property(
           "transcription", [](const TrajoptOptions& o) { return std::string(to_string(o.transcription)); },
@@ -299,6 +300,8 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_property_readonly("status", [](const TrajoptResult& r) { return std::string(to_string(r.status)); })
       .def_readonly("objective", &TrajoptResult::objective)
       .def_readonly("iterations", &TrajoptResult::iterations)
+      .def_readonly("warm_start_iterations", &TrajoptResult::warm_start_iterations)
+      .def_readonly("warm_started", &TrajoptResult::warm_started)
       .def_readonly("duration_s", &TrajoptResult::duration_s)
       .def_readonly("max_defect", &TrajoptResult::max_defect)
       .def_readonly("t", &TrajoptResult::t)
@@ -338,7 +341,13 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("t_max_s", &ManeuverProblem::t_max_s)
       .def_readwrite("w_energy", &ManeuverProblem::w_energy)
       .def_readwrite("w_time", &ManeuverProblem::w_time)
-      .def_readwrite("w_smooth", &ManeuverProblem::w_smooth);
+      .def_readwrite("w_smooth", &ManeuverProblem::w_smooth)
+      .def_readwrite("zero_end_commands", &ManeuverProblem::zero_end_commands)
+      .def_readwrite("elastic", &ManeuverProblem::elastic)
+      .def_readwrite("elastic_modes", &ManeuverProblem::elastic_modes, "-1: every elastic coordinate")
+      .def_readwrite("modes_at_rest", &ManeuverProblem::modes_at_rest, "-1: all the problem holds")
+      .def_readwrite("w_vibration", &ManeuverProblem::w_vibration)
+      .def_readwrite("tip_deflection_limit_m", &ManeuverProblem::tip_deflection_limit_m);
   m.def("solve_maneuver", &solve_maneuver, py::arg("body"), py::arg("problem"), py::arg("options") = TrajoptOptions{},
         py::call_guard<py::gil_scoped_release>(), "The optimal rigid maneuver (zero-order model, Ipopt).");
   m.def("flown_maneuver", [](const TrajoptResult& r, const ManeuverProblem& p) {

@@ -153,7 +153,7 @@ void check_ipopt_work(Section& m, const ManeuverStudy& st, int noa) {
   // more unknowns at each point of s unknowns, nothing below s = 20 (fitted to 3.6 µs per
   // unknown and iteration at s = 16, 8 to 13 ms a point and iteration at s = 71, 35 ms at
   // 131, 0.1 to 0.24 s at 211), Ipopt's matrices hold about 20 s² doubles a point, and the
-  // rigid counterpart is solved after it with the same options.
+  // rigid counterpart is solved before it (its starting point) with the same options.
   const bool elastic = st.problem.elastic;
   ManeuverStudy rigid = st;
   rigid.problem.elastic = false;
