@@ -133,6 +133,8 @@ Json to_json(const Design& design, const LqgStudyResult& r) {
   Json cases = Json::object();
   for (const auto& c : r.cases) {
     Json e = metrics_json(c.metrics);
+    // the change at 10x tighter tolerances ([lqg] error_estimate)
+    if (std::isfinite(c.energy_error_estimate_J)) e["residual_vibration_energy_error_estimate_J"] = c.energy_error_estimate_J;
     e["wall_time_s"] = c.run.wall_time_s;
     cases[c.name] = e;
   }
@@ -227,6 +229,27 @@ Json to_json(const Design& design, const SweepStudyResult& r) {
   if (std::isfinite(r.p95_low_J)) e["p95_ci95"] = std::vector<double>{r.p95_low_J, r.p95_high_J};
   e["worst"] = r.worst_J;
   j["residual_vibration_energy_J"] = e;
+  if (!r.error_checks.empty()) {
+    // the integration's share ([sweep] error_estimate): samples flown at 10x tighter tolerances
+    Json checks = Json::array();
+    for (const auto& c : r.error_checks) {
+      Json k = Json::object();
+      k["role"] = c.role;
+      k["sample"] = c.index;
+      k["residual_vibration_energy_J"] = c.energy_J;
+      if (std::isfinite(c.tight_energy_J)) {
+        k["tighter_residual_vibration_energy_J"] = c.tight_energy_J;
+        k["change_J"] = std::abs(c.tight_energy_J - c.energy_J);
+      } else {
+        k["status"] = c.message;
+      }
+      checks.push_back(k);
+    }
+    Json ie = Json::object();
+    ie["samples"] = checks;
+    if (std::isfinite(r.max_relative_error_estimate)) ie["max_relative_change"] = r.max_relative_error_estimate;
+    j["integration_error_estimate"] = ie;
+  }
   j["threads"] = r.threads;
   j["ranks"] = r.ranks;
   j["wall_time_s"] = r.wall_time_s;

@@ -111,6 +111,7 @@ void read_lqg(Section& root, Design& d, Outputs& outputs) {
   read_plant(s, st.plant);
   st.plant.process_noise_density = st.process_noise_density;
   st.delay_known = s.boolean("delay_known", false).value_or(false);
+  st.error_estimate = s.boolean("error_estimate", false).value_or(st.error_estimate);
   if (st.delay_known) {
     const double r = st.plant.delay_s * st.sample_rate_hz;
     if (std::abs(r - std::round(r)) > 1e-6)
@@ -161,6 +162,7 @@ void read_sweep(Section& root, Design& d, Outputs& outputs) {
   st.sample_rate_hz = s.number("sample_rate_hz", kRate, false).value_or(st.sample_rate_hz);
   auto req = s.number("requirement_energy_J", Range::positive().supported(1e-300, 1e12), true);
   st.requirement_energy_J = req.value_or(0.0);
+  st.error_estimate = s.boolean("error_estimate", false).value_or(st.error_estimate);
   if (auto t = s.string("table", false, true)) st.table = *t;
   if (auto f = s.string("figure", false, true)) st.figure = *f;
   for (const auto& [name, key_text] : EnumNames<SweepParameter::Name>::names) {

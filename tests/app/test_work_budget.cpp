@@ -205,3 +205,98 @@ TEST_CASE("each suppression case estimates its energy's error, and a loose toler
   for (const auto& w : loose.warnings) said = said || w.find("tvlqr (nonlinear) residual vibration energy") != std::string::npos;
   CHECK(said);
 }
+
+namespace {
+
+/// tests/data/sweep_small.toml's [controller] with a gyro and an [lqg] at 2 kHz; `extra`
+/// goes into its [controller].
+Design small_lqg(const std::string& extra = "") {
+  std::string text = text_of(std::string(FREEFLEX_SOURCE_DIR) + "/tests/data/sweep_small.toml");
+  text = text.substr(0, text.find("[sweep]")) +
+         "[[sensor]]\nname = \"gyro\"\ntype = \"gyro_attitude\"\nnoise_density = 1e-5\n[lqg]\nsample_rate_hz = 2000\n";
+  text.replace(text.find("[controller]\n"), 13, "[controller]\n" + extra);
+  return parse_design(text, "lqg_small.toml");
+}
+
+}  // namespace
+
+/// An error estimate is useful when within a factor of 10 of the error (issue 19, item 2).
+bool within_factor_10(double estimate, double error) { return estimate > 0.1 * error && estimate < 10.0 * error; }
+
+TEST_CASE("each [lqg] flight estimates its energy's error within a factor of 10", "[app]") {
+  // the flights follow [controller] closed_loop_rtol/atol; the error of each case's
+  // residual energy against the same design at 1e-11/1e-13 (whose own estimates are
+  // 1e-14-1e-13 J, below the errors measured here: 1e-12-1e-7 J)
+  const RunResult ref = run_quietly(small_lqg("closed_loop_rtol = 1e-11\nclosed_loop_atol = 1e-13\n"));
+  REQUIRE(ref.ok());
+  REQUIRE(ref.lqg->cases.size() == 3);
+  for (const char* tol : {"", "closed_loop_rtol = 1e-4\nclosed_loop_atol = 1e-6\n"}) {
+    const RunResult run = run_quietly(small_lqg(tol));
+    REQUIRE(run.ok());
+    REQUIRE(run.lqg->cases.size() == 3);
+    for (std::size_t k = 0; k < 3; ++k) {
+      const auto& c = run.lqg->cases[k];
+      const double error =
+          std::abs(c.metrics.residual_vibration_energy_J - ref.lqg->cases[k].metrics.residual_vibration_energy_J);
+      INFO((*tol ? tol : "default ") << c.name << ": " << c.metrics.residual_vibration_energy_J << " J, error " << error
+                                     << ", estimate " << c.energy_error_estimate_J);
+      REQUIRE(std::isfinite(c.energy_error_estimate_J));
+      CHECK(within_factor_10(c.energy_error_estimate_J, error));  // measured 0.57-2.8
+    }
+    for (const auto& w : run.warnings) CHECK_THAT(w, !Contains("not converged"));
+  }
+  // switched off: no estimate, less work
+  Design off = small_lqg();
+  off.lqg->error_estimate = false;
+  const RunResult none = run_quietly(off);
+  REQUIRE(none.ok());
+  for (const auto& c : none.lqg->cases) CHECK(std::isnan(c.energy_error_estimate_J));
+  CHECK(none.lqg->work_units < ref.lqg->work_units);
+}
+
+TEST_CASE("a sweep flies its median, p95, worst and nearest-the-requirement samples again, tighter", "[app]") {
+  auto sweep = [](const std::string& tol) {
+    std::string text = text_of(std::string(FREEFLEX_SOURCE_DIR) + "/tests/data/sweep_small.toml");
+    text.replace(text.find("[controller]\n"), 13, "[controller]\n" + tol);
+    return run_quietly(parse_design(text, "sweep_small.toml"));
+  };
+  const RunResult ref = sweep("closed_loop_rtol = 1e-11\nclosed_loop_atol = 1e-13\n");
+  REQUIRE(ref.sweep);
+  for (const char* tol : {"", "closed_loop_rtol = 1e-4\nclosed_loop_atol = 1e-6\n"}) {
+    const RunResult run = sweep(tol);
+    REQUIRE(run.ok());
+    const auto& checks = run.sweep->error_checks;
+    REQUIRE(checks.size() >= 2);
+    REQUIRE(checks.size() <= 4);
+    CHECK(checks.front().role == "median");
+    double largest = 0.0, worst = 0.0;
+    for (const auto& s : run.sweep->samples) largest = std::max(largest, s.metrics.residual_vibration_energy_J);
+    for (const auto& c : checks) {
+      REQUIRE(c.index >= 0);
+      const auto i = static_cast<std::size_t>(c.index);
+      const double error = std::abs(c.energy_J - ref.sweep->samples[i].metrics.residual_vibration_energy_J);
+      const double estimate = std::abs(c.tight_energy_J - c.energy_J);
+      INFO((*tol ? tol : "default ") << c.role << " sample " << c.index << ": " << c.energy_J << " J, error " << error
+                                     << ", estimate " << estimate);
+      CHECK(c.energy_J == run.sweep->samples[i].metrics.residual_vibration_energy_J);  // the sample's own
+      REQUIRE(std::isfinite(c.tight_energy_J));
+      CHECK(within_factor_10(estimate, error));  // measured 0.8 at the default tolerances
+      worst = std::max(worst, estimate / c.energy_J);
+    }
+    CHECK(run.sweep->max_relative_error_estimate == worst);
+    CHECK(std::any_of(checks.begin(), checks.end(), [&](const auto& c) { return c.energy_J == largest; }));
+    for (const auto& w : run.warnings) CHECK_THAT(w, !Contains("10x tighter"));
+  }
+  // rtol 0.1: the samples move by up to 17%, which the run says
+  const RunResult loose = sweep("closed_loop_rtol = 1e-1\nclosed_loop_atol = 1e-3\n");
+  REQUIRE(loose.sweep);
+  INFO("largest relative change " << loose.sweep->max_relative_error_estimate);
+  CHECK(std::any_of(loose.warnings.begin(), loose.warnings.end(), [](const std::string& w) {
+    return w.rfind("[sweep]: the ", 0) == 0 && w.find("at 10x tighter tolerances") != std::string::npos;
+  }));
+  // off: none
+  Design d = load_design(std::string(FREEFLEX_SOURCE_DIR) + "/tests/data/sweep_small.toml");
+  d.sweep->error_estimate = false;
+  const RunResult off = run_quietly(d);
+  CHECK(off.sweep->error_checks.empty());
+}

@@ -10,6 +10,7 @@
 // a run of the same design that finds it skips those samples.
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -38,6 +39,9 @@ struct LqgStudyResult {
     std::string name;
     SampledLoopResult run;
     ResponseMetrics metrics;
+    /// |change of residual_vibration_energy_J| when the flight is flown again at 10x
+    /// tighter tolerances (LqgStudy::error_estimate); NaN when not estimated.
+    double energy_error_estimate_J = std::numeric_limits<double>::quiet_NaN();
   };
   std::vector<Case> cases;
   double open_loop_energy_J = 0.0;    ///< the [controller]'s open loop on the full model
@@ -93,6 +97,20 @@ struct SweepStudyResult {
   /// statistics (NaN when fewer than n q (1 − q) >= 5 allows: 106 completed samples).
   double fraction_meeting_low = 0.0, fraction_meeting_high = 1.0;
   double p95_low_J = 0.0, p95_high_J = 0.0;
+  /// The integration's share of the uncertainty (SweepStudy::error_estimate): the median,
+  /// 95th-percentile, worst and nearest-the-requirement (in log E) completed samples flown
+  /// again at 10x tighter tolerances, in that order (one entry per distinct sample),
+  /// charged to the study's budget (the filter's and digital law's).
+  struct ErrorCheck {
+    std::string role;         ///< "median", "p95", "worst", "nearest_requirement", "nearest_requirement"
+    long index = -1;
+    double energy_J = 0.0;    ///< residual vibration energy as the sweep flew it
+    double tight_energy_J = std::numeric_limits<double>::quiet_NaN();  ///< NaN: the tighter flight failed
+    std::string message;      ///< why the tighter flight failed
+  };
+  std::vector<ErrorCheck> error_checks;
+  /// Largest |tight − flown| / flown over error_checks (NaN when none completed).
+  double max_relative_error_estimate = std::numeric_limits<double>::quiet_NaN();
   int threads = 1, ranks = 1;
   double wall_time_s = 0.0;         ///< flying this process's samples
   double time_per_sample_s = 0.0;   ///< wall time / samples flown here (threads and ranks included)

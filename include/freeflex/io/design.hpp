@@ -241,6 +241,9 @@ struct LqgStudy {
   double initial_std = 1e-3;             ///< the filter's P0 = initial_std² I
   PlantOptions plant;                    ///< actuator gain, lag, delay, noise seed
   bool delay_known = false;              ///< the controller predicts over the delay
+  /// Fly each case again at 10x tighter integration tolerances and report its change of
+  /// residual vibration energy (LqgStudyResult::Case::energy_error_estimate_J).
+  bool error_estimate = true;
   std::string table = "lqg";             ///< TABLE.csv: one row per case
   std::string figure = "lqg";
 };
@@ -263,6 +266,10 @@ struct SweepStudy {
   SampledLoopOptions::Feedback feedback = SampledLoopOptions::Feedback::FullState;
   double sample_rate_hz = 1000.0;
   double requirement_energy_J = 0.0;  ///< a sample meets it when its residual vibration energy is <= this
+  /// Fly the median, the 95th percentile's, the worst and the nearest-the-requirement
+  /// completed samples again at 10x tighter integration tolerances
+  /// (SweepStudyResult::error_checks).
+  bool error_estimate = true;
   std::vector<SweepParameter> parameters;
   std::string table = "sweep";             ///< TABLE.csv: one row per sample
   std::string figure = "sweep_histogram";  ///< histogram of log10 residual energy
