@@ -78,7 +78,8 @@ SuppressionOptions with_progress(SuppressionOptions o, std::ostream* log, std::u
 /// Bang-bang rotations whose switch times leave the first k modes at rest, in place of
 /// the nominal maneuver's loads: same rotation, same torque level.
 void run_bang_bang(const Design& design, const FlexibleBody& body, const SimulationOptions& sim,
-                   SuppressionStudyResult& r, const StudyLog& study_log, std::vector<std::string>& not_run) {
+                   SuppressionStudyResult& r, const StudyLog& study_log, std::vector<std::string>& not_run,
+                   std::vector<SuppressionStudyResult::Case>* tight) {
   const BangBangStudy& bb = *design.bang_bang;
   std::ostream* log = study_log.log;
   const int ne = static_cast<int>(body.elements().size());
@@ -138,6 +139,22 @@ void run_bang_bang(const Design& design, const FlexibleBody& body, const Simulat
           {name, "nonlinear", bf.t, bf.z, bf.z_dot, element_commands(ex, ne, bf.t, {}, nullptr), 0.0, {}});
     else
       warn(name + " full simulation failed: " + bf.message);
+    if (!tight) continue;
+    // the same flights at 10x tighter tolerances, for their error estimates
+    if (sim.integrator.budget && sim.integrator.budget->exhausted()) {
+      not_run.push_back("the error estimate (" + name + " at 10x tighter tolerances)");
+      continue;
+    }
+    SimulationOptions st = sim;
+    st.integrator.rtol /= 10.0;
+    st.integrator.atol /= 10.0;
+    const PerturbationResult tp = simulate_perturbation(body, ex, st);
+    const SimulationResult tf = simulate_full(body, ex, st);
+    if (tp.total.ok())
+      tight->push_back({name, "first_order", tp.total.t, tp.total.z, tp.total.z_dot,
+                        element_commands(ex, ne, tp.total.t, {}, nullptr), 0.0, {}});
+    if (tf.ok())
+      tight->push_back({name, "nonlinear", tf.t, tf.z, tf.z_dot, element_commands(ex, ne, tf.t, {}, nullptr), 0.0, {}});
   }
 }
 
@@ -230,13 +247,14 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   const std::size_t main_first = r.cases.size();
   if (!chain_cases(chain, problem, main_prefix, r.cases, true)) return r;
   const std::size_t main_end = r.cases.size();
-  // The same chain at 10x tighter tolerances: how far its energies are from converged.
-  std::optional<SuppressionResult> tight;
-  if (!st.error_estimate) {
-    // not asked for
-  } else if (budget->exhausted()) {
-    not_run.push_back("the error estimate (the chain at 10x tighter tolerances)");
-  } else {
+  // A chain again at 10x tighter tolerances: how far its energies are from converged.
+  // Its cases (named as the chain's) go to `again`.
+  std::vector<Case> again;
+  auto tight_chain = [&](const SuppressionProblem& pr, const std::string& prefix, const std::string& which) {
+    if (budget->exhausted()) {
+      not_run.push_back("the error estimate (" + which + " at 10x tighter tolerances)");
+      return;
+    }
     SuppressionOptions o = options;
     o.simulation.integrator.rtol /= 10.0;
     o.simulation.integrator.atol /= 10.0;
@@ -245,19 +263,22 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     o.closed_loop.rtol /= 10.0;
     o.closed_loop.atol /= 10.0;
     o.closed_loop_gauss_steps = std::min(2 * o.closed_loop_gauss_steps, 1000);  // the key's bound
-    if (log) *log << "suppression: the same chain at 10x tighter tolerances, for the error estimate ... " << std::flush;
-    tight = suppress_vibration(body, problem, o);
-    if (log) *log << (tight->status == Status::Solved ? "done\n" : "did not complete: " + tight->message + "\n");
-    if (tight->status != Status::Solved) {
+    if (log) *log << "suppression: " << which << " at 10x tighter tolerances, for the error estimate ... " << std::flush;
+    const SuppressionResult tight = suppress_vibration(body, pr, o);
+    if (log) *log << (tight.status == Status::Solved ? "done\n" : "did not complete: " + tight.message + "\n");
+    if (tight.status != Status::Solved) {
       if (budget->exhausted()) {
-        not_run.push_back("the error estimate (the chain at 10x tighter tolerances, stopped)");
+        not_run.push_back("the error estimate (" + which + " at 10x tighter tolerances, stopped)");
       } else {
-        r.warnings.push_back("suppression: no error estimate: the chain at 10x tighter tolerances did not complete: " +
-                             tight->message);
+        r.warnings.push_back("suppression: no error estimate for " + which +
+                             ": at 10x tighter tolerances it did not complete: " + tight.message);
         if (study_log.warn) study_log.warn(r.warnings.back());
       }
+      return;
     }
-  }
+    chain_cases(tight, pr, prefix, again, false);
+  };
+  if (st.error_estimate) tight_chain(problem, main_prefix, "the chain");
   if (vibration_aware && !maneuver->rigid_flown)
     fail("the rigid counterpart of the maneuver did not solve: no rigid_optimum rows");
   if (vibration_aware && maneuver->rigid_flown && budget->exhausted()) not_run.push_back("the rigid optimum's chain");
@@ -268,10 +289,11 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
     r.rigid_chain = suppress_vibration(body, rp, with_progress(options, log, report));
     if (r.rigid_chain->status == Status::HorizonTooShort || r.rigid_chain->status == Status::OpenLoopFailed)
       fail("rigid optimum: " + r.rigid_chain->message);
-    else
-      chain_cases(*r.rigid_chain, rp, "rigid_optimum_", r.cases, true);
+    else if (chain_cases(*r.rigid_chain, rp, "rigid_optimum_", r.cases, true) && st.error_estimate)
+      tight_chain(rp, "rigid_optimum_", "the rigid optimum's chain");
   }
-  if (design.bang_bang) run_bang_bang(design, body, options.simulation, r, study_log, not_run);
+  if (design.bang_bang)
+    run_bang_bang(design, body, options.simulation, r, study_log, not_run, st.error_estimate ? &again : nullptr);
   if (!not_run.empty()) {
     std::string list;
     for (const auto& w : not_run) list += (list.empty() ? "" : ", ") + w;
@@ -285,17 +307,14 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
   targets.R_target = end.pos.head<2>();
   targets.theta_target = end.pos(2);
   for (auto& c : r.cases) c.metrics = response_metrics(body, c.t, c.z, c.z_dot, c.commands, targets);
-  if (tight && tight->status == Status::Solved) {
+  if (!again.empty()) {
     // energies below 1e-10 of the open loop's residual are zero to the integrations'
     // accuracy: their changes are not a convergence question
     double floor = 0.0;
     for (std::size_t i = main_first; i < main_end; ++i)
       if (r.cases[i].name == main_prefix + "open_loop")
         floor = std::max(floor, 1e-10 * r.cases[i].metrics.residual_vibration_energy_J);
-    std::vector<Case> again;  // the same cases from the tighter chain
-    chain_cases(*tight, problem, main_prefix, again, false);
-    for (std::size_t i = main_first; i < main_end; ++i) {
-      Case& c = r.cases[i];
+    for (Case& c : r.cases) {
       const auto twin = std::find_if(again.begin(), again.end(),
                                      [&](const Case& a) { return a.name == c.name && a.model == c.model; });
       if (twin == again.end()) continue;  // its closed loop failed at the tighter tolerances
