@@ -458,7 +458,9 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readonly("z_dot", &SuppressionStudyResult::Case::z_dot)
       .def_readonly("commands", &SuppressionStudyResult::Case::commands)
       .def_property_readonly("residual_vibration_energy_J",
-                             [](const SuppressionStudyResult::Case& c) { return c.metrics.residual_vibration_energy_J; });
+                             [](const SuppressionStudyResult::Case& c) { return c.metrics.residual_vibration_energy_J; })
+      .def_readonly("energy_error_estimate_J", &SuppressionStudyResult::Case::energy_error_estimate_J,
+                    "change of the residual energy at 10x tighter tolerances (NaN: not estimated)");
   py::class_<SuppressionStudyResult>(m, "SuppressionStudyResult")
       .def_property_readonly("ok", &SuppressionStudyResult::ok)
       .def_readonly("message", &SuppressionStudyResult::message)

@@ -56,6 +56,12 @@ def test_one_call_chain_and_design_run_agree(tmp_path):
     assert np.array_equal(full.z, closed.z)  # same calls, same numbers: measured bit for bit
     s = ff.summary(design, run)
     assert s["studies"]["suppression"]["cases"][3]["case"] == "tvlqr"
+    # every flight estimates its error (the chain again at 10x tighter tolerances)
+    for c in run.suppression.cases:
+        assert np.isfinite(c.energy_error_estimate_J) and c.energy_error_estimate_J >= 0.0, (c.name, c.model)
+    assert full.energy_error_estimate_J < 1e-2 * full.residual_vibration_energy_J  # converged: measured 5e-4
+    assert s["studies"]["suppression"]["cases"][3]["residual_vibration_energy_error_estimate_J"] == \
+        full.energy_error_estimate_J
 
 
 def test_example_script_makes_its_figure(tmp_path):
