@@ -224,7 +224,7 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("intervals", &TrajoptOptions::intervals)
       .def_readwrite("tol", &TrajoptOptions::tol)
       .def_readwrite("max_iter", &TrajoptOptions::max_iter)
-      .def_readwrite("rigid_warm_start", &TrajoptOptions::rigid_warm_start)
+      .def_readwrite("coarse_start", &TrajoptOptions::coarse_start)
       .def_readwrite("verbose", &TrajoptOptions::verbose)
       .def_property(
           "transcription", [](const TrajoptOptions& o) { return std::string(to_string(o.transcription)); },

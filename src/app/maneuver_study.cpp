@@ -83,7 +83,7 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
   ManeuverStudyResult r;
   if (st.problem.elastic) {
     // The rigid optimum of the same objective, solved first: what the vibration-aware
-    // maneuver costs, and its starting point (TrajoptOptions::rigid_warm_start, here on
+    // maneuver costs, and its starting point (TrajoptOptions::coarse_start, here on
     // the full mesh since it is solved anyway).
     if (log) *log << "maneuver: rigid counterpart (no elastic part), for comparison and as the starting point ... "
                   << std::flush;
@@ -91,7 +91,7 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     ro.verbose = false;
     r.rigid_optimum = solve_maneuver(body, rigid_counterpart(st.problem), ro);
     if (log) *log << to_string(r.rigid_optimum->status) << " after " << r.rigid_optimum->iterations << " iterations\n";
-    opt.rigid_warm_start = false;  // solved here already
+    opt.coarse_start = false;  // solved here already
     if (r.rigid_optimum->ok()) {
       opt.guess.solution = r.rigid_optimum->trajectory;
     } else {

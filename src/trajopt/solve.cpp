@@ -34,8 +34,11 @@ std::vector<double> refine(const std::vector<double>& sigma, const Eigen::Vector
 
 }  // namespace
 
+/// `warm`: the first round starts from a near-optimal guess (Ipopt at mu_init 1e-6, as a
+/// mesh-refinement round).
 static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
-                                  const TrajoptOptions& options, std::chrono::steady_clock::time_point start);
+                                         const TrajoptOptions& options, std::chrono::steady_clock::time_point start,
+                                         bool warm = false);
 
 Eigen::VectorXd TrajoptResult::control_at(double t_s) const {
   if (!trajectory) return Eigen::VectorXd::Zero(u.cols());
@@ -60,23 +63,29 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
     tuned.ipopt_options.insert(tuned.ipopt_options.begin(), {"mumps_pivot_order", "0"});
     opts = &tuned;
   }
-  // An elastic problem given no guess starts from its rigid counterpart's optimum, solved
-  // on a quarter of the mesh: the rigid motion is then nearly right from the first
-  // iteration and Ipopt's Hessian needs far less regularization (on the slew of
-  // docs/benchmarks.md, 11 iterations instead of 19, none with the δ_w of 10-100 the
-  // straight line needed; total time 35-45% less, the rigid solve included).
+  // A problem given no guess starts from a coarse solution: the rigid problem (a rigid
+  // one itself, an elastic one its rigid counterpart) solved first on a quarter of the
+  // mesh. From the straight line Ipopt's early iterations need large Hessian
+  // regularizations (δ_w of 1-100 for the slews of docs/benchmarks.md, each costing
+  // extra factorizations); from the coarse optimum the rigid slew at N = 100 takes 11-15 ms
+  // instead of 26-28 (the coarse solve included), the elastic slew 11 iterations instead
+  // of 19 and 35-45% less time. A rigid problem continues as a mesh-refinement round does
+  // (mu_init 1e-6); an elastic one from the default barrier, its elastic state at rest.
   int warm_iterations = 0;
   std::shared_ptr<const CollocationTrajectory> warm;
-  if (problem.elastic && options.rigid_warm_start && !options.guess.solution && !options.guess.control) {
+  const int coarse_intervals = std::max(10, options.intervals / 4);
+  if (options.coarse_start && !options.guess.solution && !options.guess.control &&
+      (problem.elastic || coarse_intervals < options.intervals)) {
     TrajoptOptions ro = options;
-    ro.intervals = std::max(std::min(options.intervals, 10), options.intervals / 4);
+    ro.intervals = std::min(coarse_intervals, options.intervals);
     ro.mesh_refinements = 0;
     ro.derivative_test = "none";
     ro.verbose = false;
     ro.keep_log = false;
     ro.max_iter = std::min(options.max_iter, 500);
-    ro.rigid_warm_start = false;
-    const TrajoptResult rr = solve_maneuver_with(body, rigid_counterpart(problem), ro, start);
+    ro.coarse_start = false;
+    const TrajoptResult rr =
+        solve_maneuver_with(body, problem.elastic ? rigid_counterpart(problem) : problem, ro, start);
     warm_iterations = rr.iterations;
     if (rr.ok()) warm = rr.trajectory;
   }
@@ -86,14 +95,15 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
     tuned.guess.solution = warm;
     opts = &tuned;
   }
-  TrajoptResult res = solve_maneuver_with(body, problem, *opts, start);
+  TrajoptResult res = solve_maneuver_with(body, problem, *opts, start, warm && !problem.elastic);
   res.warm_start_iterations = warm_iterations;
   res.warm_started = warm != nullptr;
   return res;
 }
 
 static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
-                                  const TrajoptOptions& options, std::chrono::steady_clock::time_point start) {
+                                         const TrajoptOptions& options, std::chrono::steady_clock::time_point start,
+                                         bool warm) {
   TrajoptResult res;
   res.transcription = options.transcription;
   res.linear_solver = options.linear_solver;
@@ -102,7 +112,7 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
   for (int round = 0;; ++round) {
     const CollocationNlp nlp(body, problem, options.transcription, mesh);
     const Eigen::VectorXd w0 = initial_point(nlp, guess);
-    const detail::NlpSolve run = detail::solve_nlp_ipopt(nlp, w0, options, round == 0, round > 0);
+    const detail::NlpSolve run = detail::solve_nlp_ipopt(nlp, w0, options, round == 0, round > 0 || warm);
     if (round == 0 && options.derivative_test != "none")
       res.derivative_test_errors = detail::derivative_errors(run.log);
     res.log += run.log;

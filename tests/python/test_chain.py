@@ -123,7 +123,7 @@ def test_vibration_aware_slew_in_one_call_starts_from_the_rigid_optimum():
     o.transcription = "hermite_simpson_compressed"
     o.intervals = 60
     warm = ff.solve_maneuver(b, p, o)
-    o.rigid_warm_start = False
+    o.coarse_start = False
     cold = ff.solve_maneuver(b, p, o)
     assert warm.ok and cold.ok, (warm.message, cold.message)
     assert warm.warm_started and warm.warm_start_iterations > 0

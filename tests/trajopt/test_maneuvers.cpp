@@ -292,8 +292,23 @@ TEST_CASE("warm starts and control guesses", "[trajopt]") {
   TrajoptOptions o;
   o.transcription = Transcription::HermiteSimpsonCompressed;
   o.intervals = 40;
+  o.coarse_start = false;  // from the straight line: the baseline of the starts below
   const TrajoptResult cold = solve_maneuver(body, p, o);
   REQUIRE(cold.ok());
+  CHECK_FALSE(cold.warm_started);
+
+  // By default a problem given no guess starts from its own solution on a quarter of the
+  // mesh (10 intervals here) and continues at mu_init 1e-6: the same optimum, fewer
+  // iterations on the fine mesh.
+  TrajoptOptions coarse = o;
+  coarse.coarse_start = true;
+  const TrajoptResult c = solve_maneuver(body, p, coarse);
+  REQUIRE(c.ok());
+  CHECK(c.warm_started);
+  CHECK(c.warm_start_iterations > 0);
+  INFO("iterations: cold " << cold.iterations << ", coarse start " << c.iterations << " + " << c.warm_start_iterations);
+  CHECK(c.iterations < cold.iterations);
+  CHECK(c.objective == Approx(cold.objective).epsilon(1e-8));  // one optimum, to Ipopt's tol 1e-8
 
   // A previous solution on another mesh and transcription is interpolated.
   TrajoptOptions warm = o;

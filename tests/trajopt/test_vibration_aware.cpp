@@ -315,7 +315,7 @@ TEST_CASE("an elastic maneuver starts from its rigid counterpart's optimum: same
   o.transcription = Transcription::HermiteSimpsonCompressed;
   o.intervals = 60;
   const TrajoptResult warm = solve_maneuver(body, p, o);
-  o.rigid_warm_start = false;
+  o.coarse_start = false;
   const TrajoptResult cold = solve_maneuver(body, p, o);
   REQUIRE(warm.ok());
   REQUIRE(cold.ok());
@@ -332,7 +332,7 @@ TEST_CASE("an elastic maneuver starts from its rigid counterpart's optimum: same
   CHECK(warm.iterations < cold.iterations);
 
   // A rigid solve that fails (here: out of iterations) leaves the default start.
-  o.rigid_warm_start = true;
+  o.coarse_start = true;
   o.max_iter = 3;
   const TrajoptResult starved = solve_maneuver(body, p, o);
   CHECK_FALSE(starved.warm_started);

@@ -61,9 +61,9 @@ struct TrajoptResult {
 
   double objective = 0.0;    ///< J at the returned point
   int iterations = 0;        ///< Ipopt iterations, summed over mesh rounds
-  /// Iterations of the rigid counterpart solved for the starting point
-  /// (TrajoptOptions::rigid_warm_start; 0: none was solved) and whether it was used (it
-  /// is not when that solve did not succeed).
+  /// Iterations of the coarse rigid solve of the starting point (TrajoptOptions::
+  /// coarse_start; 0: none was solved) and whether it was used (it is not when that solve
+  /// did not succeed).
   int warm_start_iterations = 0;
   bool warm_started = false;
   double solve_time_s = 0.0; ///< wall time of the whole call
