@@ -188,12 +188,23 @@ void check_ipopt_work(Section& m, const ManeuverStudy& st, int noa) {
     m.problem(where, os.str());
     return;
   }
-  const double work = static_cast<double>(iterations) * (unknowns + derivatives + rigid_unknowns);
+  // the coarse start (TrajoptOptions::coarse_start): the rigid problem (or, for an elastic
+  // one, its rigid counterpart's own) on max(10, N/4) intervals, at most 500 iterations
+  double coarse = 0.0, coarse_unknowns = 0.0;
+  const int nc = std::max(10, o.intervals / 4);
+  if (o.coarse_start && nc < o.intervals && iterations > 0) {
+    coarse_unknowns = nlp_unknowns(rigid, nc, noa);
+    coarse = coarse_unknowns * static_cast<double>(std::min<long long>(iterations, 500)) / static_cast<double>(iterations);
+  }
+  const double work = static_cast<double>(iterations) * (unknowns + derivatives + rigid_unknowns + coarse);
   if (work <= lim::kMaxIpoptWork) return;
   std::ostringstream os;
   os << m.key_path(iterations_key) << " = " << iterations << " with intervals = " << o.intervals
      << " and mesh_refinements = " << o.mesh_refinements << " allows " << show_count(std::ceil(work))
      << " Ipopt iteration-unknowns (iterations x NLP unknowns, " << shortest(unknowns) << " unknowns over the rounds";
+  if (coarse > 0.0)
+    os << ", the coarse start's " << shortest(coarse_unknowns) << " for at most 500 iterations (coarse_start = false "
+       << "drops it)";
   if (elastic)
     os << ", the elastic derivatives counted as " << show_count(std::ceil(derivatives))
        << " more (s³/100 - 4 s at each point of s = " << shortest(s) << " unknowns) and the rigid counterpart's "
@@ -302,6 +313,7 @@ void read_maneuver(Section& root, Design& d, Outputs& outputs, const std::vector
   o.mesh_refinements =
       static_cast<int>(m.integer("mesh_refinements", 0, lim::kMaxMeshRefinements, false).value_or(o.mesh_refinements));
   o.mesh_tolerance = m.number("mesh_tolerance", Range::positive(), false).value_or(o.mesh_tolerance);
+  o.coarse_start = m.boolean("coarse_start", false).value_or(o.coarse_start);
   o.tol = m.number("tolerance", Range{0.0, 1.0, true, true}, false).value_or(o.tol);
   o.max_iter = static_cast<int>(m.integer("max_iterations", 1, lim::kMaxIterations, false).value_or(o.max_iter));
   st.quiet = m.boolean("quiet", false).value_or(st.quiet);

@@ -164,11 +164,12 @@ TEST_CASE("an elastic maneuver's NLP is bounded in size and its derivatives coun
   };
   // 71 unknowns a point (6 + 4 + 2 x 30 states, one control): 495 points x 71² = 2495295
   // and each iteration 35145 unknowns + 495 x (71³ / 100 - 4 x 71) + the rigid
-  // counterpart's 3465 = 1669689.45: at most 26 iterations
+  // counterpart's 3465 + its coarse start's 123 x 7 = 861 = 1670550.45: at most 26 iterations
   CHECK(problems_of(elastic(247, 26)).empty());
   CHECK_THAT(problems_of(elastic(247, 27)),
              Contains("line 16: maneuver.max_iterations = 27 with intervals = 247 and mesh_refinements = 0 allows "
-                      "45081616 Ipopt iteration-unknowns (iterations x NLP unknowns, 35145 unknowns over the rounds, the "
+                      "45104863 Ipopt iteration-unknowns (iterations x NLP unknowns, 35145 unknowns over the rounds, the "
+                      "coarse start's 861 for at most 500 iterations (coarse_start = false drops it), the "
                       "elastic derivatives counted as 1631080 more (s³/100 - 4 s at each point of s = 71 unknowns) and "
                       "the rigid counterpart's 3465); at most 4.5e+07"));
   // few elastic modes cost like the rigid problem's unknowns (s = 16: nothing more), but
@@ -178,11 +179,13 @@ TEST_CASE("an elastic maneuver's NLP is bounded in size and its derivatives coun
            "elastic = true\nelastic_modes = 2\nintervals = 200\nmax_iterations = " + std::to_string(iterations) +
            "\n[maneuver.final]\ntheta_deg = 90.0\n";
   };
-  // 401 points of 15 unknowns (6015) and the rigid counterpart's 401 x 7 = 2807: 5100 iterations
-  CHECK(problems_of(few(5100)).empty());
-  CHECK_THAT(problems_of(few(5101)), Contains("allows 45001022 Ipopt iteration-unknowns (iterations x NLP unknowns, "
-                                              "6015 unknowns over the rounds, the elastic derivatives counted as 0 "
-                                              "more"));
+  // 401 points of 15 unknowns (6015), the rigid counterpart's 401 x 7 = 2807 and its coarse
+  // start's 101 x 7 = 707 for at most 500 iterations: 5060 iterations
+  CHECK(problems_of(few(5060)).empty());
+  CHECK_THAT(problems_of(few(5061)), Contains("allows 45001643 Ipopt iteration-unknowns (iterations x NLP unknowns, "
+                                              "6015 unknowns over the rounds, the coarse start's 707 for at most 500 "
+                                              "iterations (coarse_start = false drops it), the elastic derivatives "
+                                              "counted as 0 more"));
   CHECK_THAT(problems_of(elastic(248, 2)),
              Contains("line 15: maneuver.intervals = 248 with mesh_refinements = 0 gives an elastic NLP of up to 497 "
                       "collocation points of 71 unknowns each (states and controls): points x unknowns² = 2505377; at "
