@@ -326,6 +326,13 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       fail(r, study_log, what + " failed: " + s.run.message);  // the study's work budget ran out in it
     else if (!s.run.ok())
       warn(r, study_log, what + " failed: " + s.run.message);
+    if (s.run.ok() && st.error_estimate && can_run("the comparison's error estimate"))
+      s.error_estimate = estimate_error(
+          what.c_str(), s.run, options,
+          [&](const SimulationOptions& tight) {
+            return motion ? simulate_prescribed(other, ex, *motion, tight, false) : simulate_full(other, ex, tight);
+          },
+          r, study_log);
     r.comparison = std::move(s);
   }
   if (st.perturbation && can_run("the perturbation solution")) {
