@@ -91,9 +91,12 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     ro.verbose = false;
     r.rigid_optimum = solve_maneuver(body, rigid_counterpart(st.problem), ro);
     if (log) *log << to_string(r.rigid_optimum->status) << " after " << r.rigid_optimum->iterations << " iterations\n";
-    opt.coarse_start = false;  // solved here already
+    // the elastic problem starts from it (coarse_start), here on the full mesh since it is
+    // solved anyway; coarse_start = false: from the straight line
+    const bool start_from_it = opt.coarse_start;
+    opt.coarse_start = false;
     if (r.rigid_optimum->ok()) {
-      opt.guess.solution = r.rigid_optimum->trajectory;
+      if (start_from_it) opt.guess.solution = r.rigid_optimum->trajectory;
     } else {
       r.warnings.push_back("maneuver: the rigid counterpart did not solve (" +
                            std::string(to_string(r.rigid_optimum->status)) + "): " + r.rigid_optimum->message);
@@ -103,7 +106,9 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
   r.trajopt = solve_maneuver(body, st.problem, opt);
   const TrajoptResult& t = r.trajopt;
   if (log)
-    *log << "maneuver: " << to_string(t.status) << " after " << t.iterations << " iterations, " << std::fixed
+    *log << "maneuver: " << to_string(t.status) << " after " << t.iterations << " iterations"
+         << (t.warm_started ? " (and " + std::to_string(t.warm_start_iterations) + " on the coarse mesh)" : std::string())
+         << ", " << std::fixed
          << std::setprecision(3) << t.solve_time_s << " s; objective " << std::defaultfloat << t.objective
          << ", duration " << t.duration_s << " s, max defect " << t.max_defect << '\n';
   if (!t.ok()) {
@@ -131,10 +136,11 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     if (study_log.warn) study_log.warn(r.warnings.back());
   }
   if (st.problem.elastic) {
-    if (log) *log << "maneuver: control energy " << t.control_energy << " against the rigid counterpart's "
-                  << r.rigid_optimum->control_energy << '\n';
-    if (r.rigid_optimum->ok())
+    if (r.rigid_optimum->ok()) {
+      if (log) *log << "maneuver: control energy " << t.control_energy << " against the rigid counterpart's "
+                    << r.rigid_optimum->control_energy << '\n';
       r.rigid_flown = flown_maneuver(*r.rigid_optimum, rigid_counterpart(st.problem));
+    }
   }
   return r;
 }
@@ -196,6 +202,8 @@ Json to_json(const ManeuverStudyResult& r) {
   j["message"] = t.message;
   j["objective"] = t.objective;
   j["iterations"] = t.iterations;
+  // the coarse solve the optimizer started from (TrajoptOptions::coarse_start; 0: none)
+  j["coarse_start_iterations"] = t.warm_start_iterations;
   j["solve_time_s"] = t.solve_time_s;
   j["duration_s"] = t.duration_s;
   j["max_defect"] = t.max_defect;

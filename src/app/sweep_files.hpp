@@ -26,6 +26,9 @@ struct Flight {
 /// The [lqg] filter of the design's sensors on the nominal first-order model; its
 /// discretization is charged to `budget`.
 KalmanResult design_filter(const Design& design, const Flight& flight, std::shared_ptr<WorkBudget> budget);
+/// Residual energy of the [controller] study's main chain case NAME ("open_loop",
+/// "tvlqr") on the full model; 0 when absent.
+double main_chain_energy(const SuppressionStudyResult& suppression, const std::string& name);
 /// The digital TV-LQR (solve_discrete_tvlqr) of the [controller]'s weights over its
 /// horizon at `rate`, terminal weight the continuous law's; `model` is reused when it is
 /// the discretization over that horizon at that rate, else one is made, charged to `budget`.

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -83,6 +84,8 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
     ro.verbose = false;
     ro.keep_log = false;
     ro.max_iter = std::min(options.max_iter, 500);
+    for (auto& [key, value] : ro.ipopt_options)  // Ipopt's own max_iter wins over max_iter: cap it too
+      if (key == "max_iter") value = std::to_string(std::min(500L, std::strtol(value.c_str(), nullptr, 10)));
     ro.coarse_start = false;
     const TrajoptResult rr =
         solve_maneuver_with(body, problem.elastic ? rigid_counterpart(problem) : problem, ro, start);

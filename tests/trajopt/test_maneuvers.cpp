@@ -310,6 +310,14 @@ TEST_CASE("warm starts and control guesses", "[trajopt]") {
   CHECK(c.iterations < cold.iterations);
   CHECK(c.objective == Approx(cold.objective).epsilon(1e-8));  // one optimum, to Ipopt's tol 1e-8
 
+  // A coarse solve that fails (here: out of Ipopt's own iterations, which the coarse
+  // solve keeps, capped at 500) leaves the straight line.
+  TrajoptOptions starved = coarse;
+  starved.ipopt_options = {{"max_iter", "3"}};
+  const TrajoptResult e = solve_maneuver(body, p, starved);
+  CHECK(e.warm_start_iterations == 3);
+  CHECK_FALSE(e.warm_started);
+
   // A previous solution on another mesh and transcription is interpolated.
   TrajoptOptions warm = o;
   warm.intervals = 60;
