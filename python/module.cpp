@@ -482,13 +482,65 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readonly("message", &ManeuverStudyResult::message)
       .def_readonly("trajopt", &ManeuverStudyResult::trajopt)
       .def_readonly("replay", &ManeuverStudyResult::replay);
+  py::class_<LqgStudyResult::Case>(m, "LqgCase")
+      .def_readonly("name", &LqgStudyResult::Case::name)
+      .def_property_readonly("t", [](const LqgStudyResult::Case& c) { return c.run.t; })
+      .def_property_readonly("z", [](const LqgStudyResult::Case& c) { return c.run.z; })
+      .def_property_readonly("commands", [](const LqgStudyResult::Case& c) { return c.run.commands; })
+      .def_property_readonly("residual_vibration_energy_J",
+                             [](const LqgStudyResult::Case& c) { return c.metrics.residual_vibration_energy_J; })
+      .def_readonly("energy_error_estimate_J", &LqgStudyResult::Case::energy_error_estimate_J,
+                    "change of the residual energy at 10x tighter tolerances (NaN: not estimated)");
+  py::class_<LqgStudyResult>(m, "LqgStudyResult")
+      .def_property_readonly("ok", &LqgStudyResult::ok)
+      .def_readonly("message", &LqgStudyResult::message)
+      .def_readonly("cases", &LqgStudyResult::cases)
+      .def_readonly("open_loop_energy_J", &LqgStudyResult::open_loop_energy_J)
+      .def_readonly("continuous_energy_J", &LqgStudyResult::continuous_energy_J)
+      .def_readonly("final_elastic_std", &LqgStudyResult::final_elastic_std);
+  py::class_<SweepStudyResult::ErrorCheck>(m, "SweepErrorCheck")
+      .def_readonly("role", &SweepStudyResult::ErrorCheck::role)
+      .def_readonly("index", &SweepStudyResult::ErrorCheck::index)
+      .def_readonly("energy_J", &SweepStudyResult::ErrorCheck::energy_J)
+      .def_readonly("tight_energy_J", &SweepStudyResult::ErrorCheck::tight_energy_J)
+      .def_readonly("message", &SweepStudyResult::ErrorCheck::message);
+  py::class_<SweepStudyResult>(m, "SweepStudyResult")
+      .def_property_readonly("ok", &SweepStudyResult::ok)
+      .def_readonly("message", &SweepStudyResult::message)
+      .def_readonly("parameter_names", &SweepStudyResult::parameter_names)
+      .def_property_readonly("values",
+                             [](const SweepStudyResult& r) {
+                               Eigen::MatrixXd v(static_cast<Eigen::Index>(r.samples.size()),
+                                                 static_cast<Eigen::Index>(r.parameter_names.size()));
+                               for (std::size_t i = 0; i < r.samples.size(); ++i)
+                                 for (std::size_t k = 0; k < r.samples[i].values.size() && k < r.parameter_names.size(); ++k)
+                                   v(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = r.samples[i].values[k];
+                               return v;
+                             }, "one row per sample, one column per parameter")
+      .def_property_readonly("residual_vibration_energy_J",
+                             [](const SweepStudyResult& r) {
+                               Eigen::VectorXd e(static_cast<Eigen::Index>(r.samples.size()));
+                               for (std::size_t i = 0; i < r.samples.size(); ++i)
+                                 e(static_cast<Eigen::Index>(i)) = r.samples[i].metrics.residual_vibration_energy_J;
+                               return e;
+                             }, "per sample (NaN: the sample failed)")
+      .def_readonly("fraction_meeting", &SweepStudyResult::fraction_meeting)
+      .def_property_readonly("fraction_meeting_ci95",
+                             [](const SweepStudyResult& r) {
+                               return std::make_pair(r.fraction_meeting_low, r.fraction_meeting_high);
+                             })
+      .def_readonly("p95_J", &SweepStudyResult::p95_J)
+      .def_readonly("error_checks", &SweepStudyResult::error_checks)
+      .def_readonly("max_relative_error_estimate", &SweepStudyResult::max_relative_error_estimate);
   py::class_<RunResult>(m, "RunResult")
       .def_property_readonly("ok", &RunResult::ok)
       .def_readonly("message", &RunResult::message)
       .def_readonly("files", &RunResult::files)
       .def_readonly("warnings", &RunResult::warnings)
       .def_readonly("maneuver", &RunResult::maneuver)
-      .def_readonly("suppression", &RunResult::suppression);
+      .def_readonly("suppression", &RunResult::suppression)
+      .def_readonly("lqg", &RunResult::lqg)
+      .def_readonly("sweep", &RunResult::sweep);
   m.def("run", [](const Design& d, const std::string& out_dir) {
     RunOptions o;
     o.out_dir = out_dir;

@@ -132,3 +132,34 @@ def test_vibration_aware_slew_in_one_call_starts_from_the_rigid_optimum():
     # one optimum: Ipopt's tol 1e-8 leaves about 1e-9 in J
     assert abs(warm.objective - cold.objective) < 1e-7 * abs(cold.objective)
     assert warm.terminal_vibration_energy_J < 1e-14  # at rest to Ipopt's constraint tolerance
+
+
+def test_lqg_and_sweep_results_with_their_error_estimates():
+    """tests/data/sweep_small.toml run from Python: the sweep's samples and statistics and
+    its integration checks; with a gyro and an [lqg], the LQG flights and their estimates,
+    the same numbers summary.json gives."""
+    text = (SOURCE / "tests" / "data" / "sweep_small.toml").read_text()
+    design = ff.parse_design(text, "sweep_small.toml")
+    run = ff.run(design)
+    assert run.ok, run.message
+    sw = run.sweep
+    s = ff.summary(design, run)["studies"]["sweep"]
+    assert sw.values.shape == (s["samples"], len(sw.parameter_names))
+    assert np.isfinite(sw.residual_vibration_energy_J).all()
+    assert sw.fraction_meeting == s["fraction_meeting_requirement"]
+    assert 1 <= len(sw.error_checks) <= 4 and sw.error_checks[0].role == "median"
+    for c in sw.error_checks:  # each check's energy is its sample's own
+        assert c.energy_J == sw.residual_vibration_energy_J[c.index]
+    assert sw.max_relative_error_estimate == s["integration_error_estimate"]["max_relative_change"]
+
+    text = text[: text.index("[sweep]")] + \
+        '[[sensor]]\nname = "gyro"\ntype = "gyro_attitude"\nnoise_density = 1e-5\n[lqg]\nsample_rate_hz = 2000\n'
+    design = ff.parse_design(text, "lqg_small.toml")
+    run = ff.run(design)
+    assert run.ok, run.message
+    assert [c.name for c in run.lqg.cases] == ["tvlqr_sampled", "digital_tvlqr", "lqg"]
+    cases = ff.summary(design, run)["studies"]["lqg"]["cases"]
+    for c in run.lqg.cases:
+        assert np.isfinite(c.energy_error_estimate_J)
+        assert c.energy_error_estimate_J == cases[c.name]["residual_vibration_energy_error_estimate_J"]
+    assert run.lqg.open_loop_energy_J > 0.0
