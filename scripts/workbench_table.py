@@ -19,7 +19,8 @@ for name in ("paper_table1", "paper_force_pulse", "paper_moment_pulse"):
 s = summary("suppress_slew")
 m = s["studies"]["maneuver"]
 rows.append(("slew optimum (min energy)",
-             f"J = {m['objective']:.4f} N^2 s in {m['duration_s']:g} s ({m['status']}, {m['iterations']} Ipopt iterations)",
+             f"J = {m['objective']:.4f} N^2 s in {m['duration_s']:g} s ({m['status']}, {m['iterations']} Ipopt iterations"
+             + (f" after {m['coarse_start_iterations']} on the coarse mesh)" if m.get('coarse_start_iterations') else ")"),
              f"{results / 'suppress_slew'}/trajectory.csv"))
 cases = {(c["case"], c["model"]): c for c in s["studies"]["suppression"]["cases"]}
 for case, label in (("open_loop", "open loop"), ("tvlqr", "under TV-LQR")):
