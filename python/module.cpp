@@ -349,7 +349,9 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("w_vibration", &ManeuverProblem::w_vibration)
       .def_readwrite("tip_deflection_limit_m", &ManeuverProblem::tip_deflection_limit_m);
   m.def("solve_maneuver", &solve_maneuver, py::arg("body"), py::arg("problem"), py::arg("options") = TrajoptOptions{},
-        py::call_guard<py::gil_scoped_release>(), "The optimal rigid maneuver (zero-order model, Ipopt).");
+        py::call_guard<py::gil_scoped_release>(), "The optimal maneuver by collocation and Ipopt: the rigid motion (zero-order model), with the elastic "
+        "modes inside the problem when problem.elastic; started from a coarse solution unless "
+        "options.coarse_start is False.");
   m.def("flown_maneuver", [](const TrajoptResult& r, const ManeuverProblem& p) {
     if (!r.ok()) throw std::invalid_argument("flown_maneuver: the maneuver was not solved (" + r.message + ")");
     return flown_maneuver(r, p);
