@@ -81,6 +81,7 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
   }
   if (!ipopt_output_file(st.options).empty()) opt.keep_log = true;
   ManeuverStudyResult r;
+  const ManeuverProblem rigid = rigid_counterpart(st.problem);  // used when elastic
   if (st.problem.elastic) {
     // The rigid optimum of the same objective, solved first: what the vibration-aware
     // maneuver costs, and its starting point (TrajoptOptions::coarse_start, here on
@@ -89,7 +90,7 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
                   << std::flush;
     TrajoptOptions ro = opt;
     ro.verbose = false;
-    r.rigid_optimum = solve_maneuver(body, rigid_counterpart(st.problem), ro);
+    r.rigid_optimum = solve_maneuver(body, rigid, ro);
     if (log) *log << to_string(r.rigid_optimum->status) << " after " << r.rigid_optimum->iterations << " iterations\n";
     // the elastic problem starts from it (coarse_start), here on the full mesh since it is
     // solved anyway; coarse_start = false: from the straight line
@@ -139,7 +140,7 @@ ManeuverStudyResult run_maneuver_study(const Design& design, bool quiet, const S
     if (r.rigid_optimum->ok()) {
       if (log) *log << "maneuver: control energy " << t.control_energy << " against the rigid counterpart's "
                     << r.rigid_optimum->control_energy << '\n';
-      r.rigid_flown = flown_maneuver(*r.rigid_optimum, rigid_counterpart(st.problem));
+      r.rigid_flown = flown_maneuver(*r.rigid_optimum, rigid);
     }
   }
   return r;

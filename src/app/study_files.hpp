@@ -18,6 +18,13 @@ std::string status_text(const R& r) {
   return r.ok() ? "ok" : to_string(r.status);
 }
 
+/// A residual vibration energy flown again at 10x tighter tolerances is not converged
+/// when it moved by more than a tenth of itself and by more than `floor` (1e-10 of the
+/// open loop's energy: below it an energy is zero to the integrations' accuracy).
+inline bool energy_not_converged(double change_J, double energy_J, double floor_J) {
+  return change_J > 0.1 * energy_J && change_J > floor_J;
+}
+
 /// Figures leave out a coordinate whose largest excursion is at most this: one that
 /// never moves (R_x, R_y of a pure rotation) would be a flat panel at zero.
 inline constexpr double kMovingCoordinate = 1e-9;

@@ -336,7 +336,7 @@ SuppressionStudyResult run_suppression_study(const Design& design, const Maneuve
       if (twin == again.end()) continue;  // its closed loop failed at the tighter tolerances
       const ResponseMetrics m = response_metrics(body, twin->t, twin->z, twin->z_dot, twin->commands, targets);
       c.energy_error_estimate_J = std::abs(m.residual_vibration_energy_J - c.metrics.residual_vibration_energy_J);
-      if (c.energy_error_estimate_J > 0.1 * c.metrics.residual_vibration_energy_J && c.energy_error_estimate_J > floor) {
+      if (detail::energy_not_converged(c.energy_error_estimate_J, c.metrics.residual_vibration_energy_J, floor)) {
         std::ostringstream os;
         os << "suppression: the " << c.name << " (" << c.model << ") residual vibration energy "
            << c.metrics.residual_vibration_energy_J << " J moves by " << c.energy_error_estimate_J

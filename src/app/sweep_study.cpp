@@ -18,6 +18,7 @@
 #include <thread>
 #include <tuple>
 
+#include "app/study_files.hpp"
 #include "app/sweep_files.hpp"
 #include "freeflex/io/output.hpp"
 #include "freeflex/version.hpp"
@@ -206,7 +207,7 @@ LqgStudyResult run_lqg_study(const Design& design, const SuppressionStudyResult&
       const ResponseMetrics m = response_metrics(f.body, again.t, again.z, again.z_dot, again.commands, tg);
       const double e = c.metrics.residual_vibration_energy_J;
       c.energy_error_estimate_J = std::abs(m.residual_vibration_energy_J - e);
-      if (c.energy_error_estimate_J > 0.1 * e && c.energy_error_estimate_J > floor) {
+      if (detail::energy_not_converged(c.energy_error_estimate_J, e, floor)) {
         std::ostringstream os;
         os << "[lqg]: the " << c.name << " residual vibration energy " << e << " J moves by "
            << c.energy_error_estimate_J << " J at 10x tighter tolerances: not converged; tighten [controller] "
@@ -628,8 +629,7 @@ SweepStudyResult run_sweep_study(const Design& design, const SuppressionStudyRes
         os << "[sweep]: no error estimate from the " << c.role << " sample " << c.index << ": " << c.message;
       } else {
         const bool meets = c.energy_J <= sw.requirement_energy_J, tight_meets = c.tight_energy_J <= sw.requirement_energy_J;
-        const double change = std::abs(c.tight_energy_J - c.energy_J);
-        const bool moved = change > 0.1 * c.energy_J && change > floor;
+        const bool moved = detail::energy_not_converged(std::abs(c.tight_energy_J - c.energy_J), c.energy_J, floor);
         if (!moved && meets == tight_meets) continue;
         os << "[sweep]: the " << c.role << " sample " << c.index << "'s residual vibration energy " << c.energy_J
            << " J moves to " << c.tight_energy_J << " J at 10x tighter tolerances";

@@ -191,10 +191,12 @@ void check_ipopt_work(Section& m, const ManeuverStudy& st, int noa) {
   // the coarse start (TrajoptOptions::coarse_start): the rigid problem (or, for an elastic
   // one, its rigid counterpart's own) on max(10, N/4) intervals, at most 500 iterations
   double coarse = 0.0, coarse_unknowns = 0.0;
-  const int nc = std::max(10, o.intervals / 4);
+  const int nc = o.coarse_start_intervals();
   if (o.coarse_start && nc < o.intervals && iterations > 0) {
     coarse_unknowns = nlp_unknowns(rigid, nc, noa);
-    coarse = coarse_unknowns * static_cast<double>(std::min<long long>(iterations, 500)) / static_cast<double>(iterations);
+    coarse = coarse_unknowns *
+             static_cast<double>(std::min<long long>(iterations, TrajoptOptions::coarse_start_max_iter)) /
+             static_cast<double>(iterations);
   }
   const double work = static_cast<double>(iterations) * (unknowns + derivatives + rigid_unknowns + coarse);
   if (work <= lim::kMaxIpoptWork) return;
@@ -203,8 +205,8 @@ void check_ipopt_work(Section& m, const ManeuverStudy& st, int noa) {
      << " and mesh_refinements = " << o.mesh_refinements << " allows " << show_count(std::ceil(work))
      << " Ipopt iteration-unknowns (iterations x NLP unknowns, " << shortest(unknowns) << " unknowns over the rounds";
   if (coarse > 0.0)
-    os << ", the coarse start's " << shortest(coarse_unknowns) << " for at most 500 iterations (coarse_start = false "
-       << "drops it)";
+    os << ", the coarse start's " << shortest(coarse_unknowns) << " for at most " << TrajoptOptions::coarse_start_max_iter
+       << " iterations (coarse_start = false drops it)";
   if (elastic)
     os << ", the elastic derivatives counted as " << show_count(std::ceil(derivatives))
        << " more (s³/100 - 4 s at each point of s = " << shortest(s) << " unknowns) and the rigid counterpart's "

@@ -74,7 +74,7 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
   // (mu_init 1e-6); an elastic one from the default barrier, its elastic state at rest.
   int warm_iterations = 0;
   std::shared_ptr<const CollocationTrajectory> warm;
-  const int coarse_intervals = std::max(10, options.intervals / 4);
+  const int coarse_intervals = options.coarse_start_intervals();
   if (options.coarse_start && !options.guess.solution && !options.guess.control &&
       (problem.elastic || coarse_intervals < options.intervals)) {
     TrajoptOptions ro = options;
@@ -83,9 +83,10 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
     ro.derivative_test = "none";
     ro.verbose = false;
     ro.keep_log = false;
-    ro.max_iter = std::min(options.max_iter, 500);
+    constexpr int cap = TrajoptOptions::coarse_start_max_iter;
+    ro.max_iter = std::min(options.max_iter, cap);
     for (auto& [key, value] : ro.ipopt_options)  // Ipopt's own max_iter wins over max_iter: cap it too
-      if (key == "max_iter") value = std::to_string(std::min(500L, std::strtol(value.c_str(), nullptr, 10)));
+      if (key == "max_iter") value = std::to_string(std::min<long>(cap, std::strtol(value.c_str(), nullptr, 10)));
     ro.coarse_start = false;
     const TrajoptResult rr =
         solve_maneuver_with(body, problem.elastic ? rigid_counterpart(problem) : problem, ro, start);

@@ -12,12 +12,11 @@
 #include "freeflex/dynamics/zero_order.hpp"
 #include "freeflex/trajopt/replay.hpp"
 #include "freeflex/trajopt/solve.hpp"
+#include "support/slew.hpp"
 
 using namespace freeflex;
 
 namespace {
-
-const double kPi = std::acos(-1.0);
 
 /// The paper's beam (1 m, 1 kg, EI 1, o at the centre: I_o = 1/12) with a torque at o.
 FlexibleBody torque_body() {
@@ -36,23 +35,8 @@ ManeuverProblem rotation(double dtheta, double T) {
   return p;
 }
 
-/// Two thrusters fixed to the body pushing along body y at the tips s = 0 and s = L.
-FlexibleBody thruster_body() {
-  return FlexibleBody(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), 2,
-                      {{"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                       {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
-}
-
-/// From rest at the origin to rest at (1 m, 0.5 m, 90°) in 3 s, |u| <= 1 N, minimum energy.
-ManeuverProblem slew() {
-  ManeuverProblem p;
-  p.actuators = {0, 1};
-  p.u_min = Eigen::Vector2d(-1.0, -1.0);
-  p.u_max = Eigen::Vector2d(1.0, 1.0);
-  p.x_final << 1.0, 0.5, kPi / 2, 0.0, 0.0, 0.0;
-  p.duration_s = 3.0;
-  return p;
-}
+using freeflex_test::slew;           // the two-thruster slew (tests/support/slew.hpp)
+using freeflex_test::thruster_body;
 
 /// The end state of the open-loop replay (ZeroOrderModel under r's commands, CVODES).
 Eigen::VectorXd replay(const FlexibleBody& body, const ManeuverProblem& p, const TrajoptResult& r) {

@@ -11,6 +11,7 @@
 #include "freeflex/io/design.hpp"
 #include "freeflex/trajopt/chattering.hpp"
 #include "freeflex/trajopt/solve.hpp"
+#include "support/slew.hpp"
 
 using namespace freeflex;
 
@@ -300,15 +301,8 @@ TEST_CASE("an elastic maneuver starts from its rigid counterpart's optimum: same
           "[trajopt]") {
   // The two-thruster slew of bench_trajopt with every coordinate of the NOA 4 model at rest
   // at T (3 s, 60 intervals, Hermite-Simpson compressed).
-  const FlexibleBody body(Beam(BeamProperties::uniform(1.0, 1.0, 1.0)), 4,
-                          {{"left", ForceElement::Type::Thruster, 0.0, {0.0, 1.0}, false},
-                           {"right", ForceElement::Type::Thruster, 1.0, {0.0, 1.0}, false}});
-  ManeuverProblem p;
-  p.actuators = {0, 1};
-  p.u_min = Eigen::Vector2d(-1.0, -1.0);
-  p.u_max = Eigen::Vector2d(1.0, 1.0);
-  p.x_final << 1.0, 0.5, 0.5 * std::acos(-1.0), 0.0, 0.0, 0.0;
-  p.duration_s = 3.0;
+  const FlexibleBody body = freeflex_test::thruster_body(4);
+  ManeuverProblem p = freeflex_test::slew();
   p.elastic = true;
   p.modes_at_rest = ManeuverProblem::all_modes;
   TrajoptOptions o;

@@ -102,7 +102,7 @@ struct SweepStudyResult {
   /// again at 10x tighter tolerances, in that order (one entry per distinct sample),
   /// charged to the study's budget (the filter's and digital law's).
   struct ErrorCheck {
-    std::string role;         ///< "median", "p95", "worst", "nearest_requirement", "nearest_requirement"
+    std::string role;         ///< "median", "p95", "worst", "nearest_requirement"
     long index = -1;
     double energy_J = 0.0;    ///< residual vibration energy as the sweep flew it
     double tight_energy_J = std::numeric_limits<double>::quiet_NaN();  ///< NaN: the tighter flight failed

@@ -8,6 +8,7 @@
 // about it (trajopt/elastic_dynamics.hpp). The cost is
 //   J = w_energy ∫ Σ_k W_k u_k² dt + w_time T + w_smooth ∫ Σ_k u_k'² dt + w_vibration E_vib(T)
 // over t in [0, T], T fixed (duration_s) or free in [t_min_s, t_max_s].
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -168,6 +169,9 @@ struct TrajoptOptions {
   /// are reported in TrajoptResult::warm_start_iterations and its time is part of
   /// solve_time_s.
   bool coarse_start = true;
+  static constexpr int coarse_start_max_iter = 500;
+  /// The coarse mesh of coarse_start (used only when coarser than `intervals`).
+  int coarse_start_intervals() const { return std::max(10, intervals / 4); }
   bool keep_log = false;  ///< copy Ipopt's log (of every solve) into TrajoptResult::log
   int log_level = 5;      ///< Ipopt print level of that copy (0-12)
 };
