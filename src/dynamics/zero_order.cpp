@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "dynamics/body_kernels.hpp"
 #include "util/quintic_hermite.hpp"
 
 namespace freeflex {
@@ -15,8 +16,12 @@ Eigen::Vector3d ZeroOrderModel::acceleration(const Eigen::Ref<const Eigen::Vecto
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n();
   const double th = x0(2), thd = x0(5), c = std::cos(th), s = std::sin(th);
-  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
-  const Eigen::VectorXd G = body_.generalized_force(th, q0, commands);
+  // Scratch kept per thread: this runs thousands of times per replay or simulation, where
+  // two allocations per call cost more than the arithmetic.
+  thread_local Eigen::VectorXd q0, G;
+  if (q0.size() != n) q0 = Eigen::VectorXd::Zero(n);
+  G.resize(3 + n);
+  detail::generalized_force(body_, th, q0, commands, G);
   // eq. 6.3: C J s0 = S_o [-sin, cos], C s0 = S_o [cos, sin]
   Eigen::Matrix3d Mrr;
   Mrr << mi.m, 0.0, -mi.S_o * s,  //

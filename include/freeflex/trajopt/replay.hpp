@@ -18,7 +18,7 @@ IntegrationResult replay_open_loop(const FlexibleBody& body, const ManeuverProbl
                                    const TrajoptResult& result, const IntegratorOptions& options);
 
 /// The optimizer's final state against the commands flown on the model it optimized: the
-/// zero-order model integrated by CVODES (rtol 1e-10) under the solution's commands, from
+/// zero-order model integrated by the Verner 9(8) pair (rtol 1e-10) under the solution's commands, from
 /// its initial state, compared with the collocation's state at T. A miss larger than
 /// `relative_limit` of the maneuver's scale (position: max(|ΔR|, beam length); attitude:
 /// max(|Δθ|, 1 rad)) is flagged: the mesh does not resolve the rigid motion.
