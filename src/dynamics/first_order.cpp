@@ -102,24 +102,34 @@ FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) cons
   zdd0.head<3>() = fr.acc;
   o.r0 = G - o.M0 * zdd0;
   o.r0.head<2>() += thd * thd * fr.Cs0;
+  o.theta0 = th;
   return o;
 }
 
 const StateSpace& FirstOrderModel::state_space(Data& data, const Instant& at) const {
-  const int N = body_.dofs();
+  const int N = body_.dofs(), m = input_size();
   const Implicit o = implicit_form(at);
-  const Eigen::LLT<Eigen::MatrixXd> llt(o.M0);
+  // 𝕄0(θ0)⁻¹ X = T 𝕄0(0)⁻¹ Tᵀ X with T = blockdiag(C(θ0), 1, I), as in rhs(): one product
+  // with the inverse formed once (a factorization and its solves at every instant took a
+  // sixth of a TV-LQR sweep's instructions at NOA 6; docs/benchmarks.md)
+  Eigen::MatrixXd& X = data.X;
+  X.resize(N, 2 * N + m + 1);
+  X << o.Kt, o.Ct, o.Gu, o.r0;
+  const Eigen::Matrix2d C = rot(o.theta0);
+  X.topRows<2>() = (C.transpose() * X.topRows<2>()).eval();
+  Eigen::MatrixXd& Y = data.Y;
+  Y.noalias() = rest_inverse_ * X;
+  Y.topRows<2>() = (C * Y.topRows<2>()).eval();
   Eigen::MatrixXd& A = data.state_space.A;
   Eigen::MatrixXd& B = data.state_space.B;
   Eigen::VectorXd& g = data.state_space.g;
   A.setZero(2 * N, 2 * N);
   A.topRightCorner(N, N).setIdentity();
-  A.bottomLeftCorner(N, N) = llt.solve(o.Kt);
-  A.bottomRightCorner(N, N) = llt.solve(o.Ct);
-  B.setZero(2 * N, input_size());
-  B.bottomRows(N) = llt.solve(o.Gu);
+  A.bottomRows(N) = Y.leftCols(2 * N);
+  B.setZero(2 * N, m);
+  B.bottomRows(N) = Y.middleCols(2 * N, m);
   g.setZero(2 * N);
-  g.tail(N) = llt.solve(o.r0);
+  g.tail(N) = Y.col(2 * N + m);
   return data.state_space;
 }
 

@@ -32,6 +32,7 @@ class FirstOrderModel {
     Eigen::MatrixXd Ct;  ///< -∂(residual)/∂z'
     Eigen::MatrixXd Gu;  ///< generalized force per unit command of each input
     Eigen::VectorXd r0;  ///< residual of the full model on the nominal motion (the forcing)
+    double theta0 = 0.0; ///< the nominal angle θ0 [rad]: 𝕄0 = 𝕄(θ0, 0)
   };
 
   /// Workspace of one thread of evaluation (make one with create_data()): results and
@@ -42,6 +43,7 @@ class FirstOrderModel {
     Eigen::VectorXd xq_dot;  ///< from the last prescribed_rhs()
     Eigen::VectorXd q, q0, u0, f, dG, x1;  // scratch of rhs()
     Eigen::Matrix2d C;
+    Eigen::MatrixXd X, Y;  // scratch of state_space()
   };
 
   /// `inputs` are the element indices whose commands u1 perturb (the actuators); the
