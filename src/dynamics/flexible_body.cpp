@@ -38,8 +38,14 @@ FlexibleBody::FlexibleBody(const Beam& beam, int noa, std::vector<ForceElement> 
 FlexibleBody::FlexibleBody(const Beam& beam, int modes, const BasisOptions& basis,
                            std::vector<ForceElement> elements, std::vector<double> damping_ratios,
                            bool geometric_stiffening)
+    : FlexibleBody(beam, make_basis(beam, modes, basis), std::move(elements), std::move(damping_ratios),
+                   geometric_stiffening) {}
+
+FlexibleBody::FlexibleBody(const Beam& beam, std::shared_ptr<const ShapeBasis> basis,
+                           std::vector<ForceElement> elements, std::vector<double> damping_ratios,
+                           bool geometric_stiffening)
     : beam_(beam),
-      basis_(make_basis(beam_, modes, basis)),
+      basis_(basis ? std::move(basis) : throw std::invalid_argument("FlexibleBody: no shape basis")),
       mi_(geometric_stiffening ? stiffened_modal_integrals(beam_, *basis_) : modal_integrals(beam_, *basis_)),
       elements_(std::move(elements)),
       stiffening_(geometric_stiffening) {

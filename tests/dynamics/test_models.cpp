@@ -193,3 +193,18 @@ TEST_CASE("first-order rhs (term by term) equals A x1 + B u1 + g", "[dynamics]")
     CHECK((fast - slow).cwiseAbs().maxCoeff() < 1e-11 * (A.cwiseAbs() * x1.cwiseAbs()).maxCoeff());
   }
 }
+
+TEST_CASE("a body on a caller's basis is the body on that basis; no basis is an error", "[dynamics]") {
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  const std::vector<ForceElement> torque{{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}};
+  const FlexibleBody named(beam, 6, torque, {0.01});
+  const FlexibleBody given(beam, make_basis(beam, 6, BasisOptions{}), torque, {0.01});
+  // the same functions, integrals and forces: the same numbers, bit for bit
+  CHECK(given.n() == 6);
+  CHECK(given.integrals().M == named.integrals().M);
+  CHECK(given.integrals().K == named.integrals().K);
+  CHECK(given.damping() == named.damping());
+  const Eigen::VectorXd q = Eigen::VectorXd::LinSpaced(6, -0.1, 0.2);
+  CHECK(given.element_force(0, 0.3, q) == named.element_force(0, 0.3, q));
+  CHECK_THROWS_WITH(FlexibleBody(beam, std::shared_ptr<const ShapeBasis>(), torque), Catch::Contains("no shape basis"));
+}

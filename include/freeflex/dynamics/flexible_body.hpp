@@ -28,6 +28,10 @@ class FlexibleBody {
   /// as make_basis does.
   FlexibleBody(const Beam& beam, int n, const BasisOptions& basis, std::vector<ForceElement> elements,
                std::vector<double> damping_ratios = {}, bool geometric_stiffening = false);
+  /// On a basis of the caller's (any ShapeBasis implementation; e.g. a reduced basis of
+  /// combinations of another's functions). Throws as above, and for a null basis.
+  FlexibleBody(const Beam& beam, std::shared_ptr<const ShapeBasis> basis, std::vector<ForceElement> elements,
+               std::vector<double> damping_ratios = {}, bool geometric_stiffening = false);
 
   int n() const { return basis_->size(); }       ///< elastic coordinates
   int dofs() const { return 3 + basis_->size(); } ///< z = [Rx, Ry, theta, q]
