@@ -194,7 +194,7 @@ TEST_CASE("first-order rhs (term by term) equals A x1 + B u1 + g", "[dynamics]")
   }
 }
 
-TEST_CASE("a body on a caller's basis is the body on that basis; no basis is an error", "[dynamics]") {
+TEST_CASE("a body on a caller's basis is the body on that basis, and no basis is an error", "[dynamics]") {
   const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
   const std::vector<ForceElement> torque{{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}};
   const FlexibleBody named(beam, 6, torque, {0.01});
