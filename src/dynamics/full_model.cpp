@@ -86,21 +86,25 @@ Eigen::VectorXd FullModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
   return Mz * zdd + h - G;
 }
 
-bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
-                    const Eigen::Ref<const Eigen::VectorXd>& commands) const {
-  if (body_.geometric_stiffening()) return rhs_stiffened(d, x, commands);
-  // The same equations as residual(), written as plain loops over raw arrays: this runs
-  // tens of thousands of times per simulation on vectors of 9 to 30 entries, where the
-  // setup of Eigen's dynamic-size kernels costs more than the arithmetic.
-  const ModalIntegrals& mi = body_.integrals();
-  const int N = body_.dofs(), n = body_.n();
+namespace {
+
+/// The body of FullModel::rhs for NN elastic coordinates known at compile time (NN > 0)
+/// or at run time (NN = 0, n given). The same operations in the same order either way, so
+/// the same bits: a fixed NN only lets the compiler unroll and vectorize the loops over
+/// entries (no reductions are reordered; the dot products stay sequential).
+template <int NN>
+bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
+                     const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
+                     int n_runtime) {
+  const ModalIntegrals& mi = body.integrals();
+  const int n = NN > 0 ? NN : n_runtime, N = 3 + n;
   const double* z = x.data();
   const double* zd = z + N;
   const double* q = z + 3;
   const double* qd = zd + 3;
   const double th = z[2], thd = zd[2], thd2 = thd * thd;
   const double c = std::cos(th), s = std::sin(th);
-  detail::generalized_force(body_, th, x.segment(3, n), commands, d.G);  // R rows in inertial axes
+  detail::generalized_force(body, th, x.segment(3, n), commands, d.G);  // R rows in inertial axes
   const double* G = d.G.data();
   double* Mq = d.Mq.data();
   double* Kq = d.Kq.data();
@@ -129,8 +133,8 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   g[1] = -s * G[0] + c * G[1] + thd2 * Pq;
   g[2] = G[2] - 2.0 * thd * qMqd;
   for (int i = 0; i < n; ++i) g[3 + i] = G[3 + i] + thd2 * Mq[i] - Kq[i];
-  if (body_.damped()) {
-    d.Dzd.noalias() = body_.damping() * x.tail(N);
+  if (body.damped()) {
+    d.Dzd.noalias() = body.damping() * x.tail(N);
     const double* Dz = d.Dzd.data();
     g[0] -= c * Dz[0] + s * Dz[1];
     g[1] -= -s * Dz[0] + c * Dz[1];
@@ -142,27 +146,47 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   double* w = x_dot.data() + N;
   for (int i = 0; i < N; ++i) w[i] = 0.0;
   for (int j = 0; j < N; ++j) {
-    const double* col = rest_inverse_.data() + static_cast<std::ptrdiff_t>(j) * N;
+    const double* col = rest_inverse.data() + static_cast<std::ptrdiff_t>(j) * N;
     const double gj = g[j];
     for (int i = 0; i < N; ++i) w[i] += col[i] * gj;
   }
   const double a = -Pq, cc = qMq;
-  const double W00 = rest_inverse_(0, 0), W01 = rest_inverse_(0, 2), W20 = rest_inverse_(2, 0),
-               W21 = rest_inverse_(2, 2);
+  const double W00 = rest_inverse(0, 0), W01 = rest_inverse(0, 2), W20 = rest_inverse(2, 0),
+               W21 = rest_inverse(2, 2);
   const double k00 = 1.0 + W01 * a, k01 = W00 * a + W01 * cc, k10 = W21 * a, k11 = 1.0 + W20 * a + W21 * cc;
   // det 𝕄_b = det 𝕄_b(0) · det(I + Uᵀ W S): a non-positive value means 𝕄 is not positive definite
   const double det = k00 * k11 - k01 * k10;
   if (!(det > 0.0)) return false;
   const double v0 = (k11 * w[0] - k01 * w[2]) / det, v1 = (k00 * w[2] - k10 * w[0]) / det;
   const double Sv0 = a * v1, Sv1 = a * v0 + cc * v1;
-  const double* W0 = rest_inverse_.data();
-  const double* W2 = rest_inverse_.data() + 2 * static_cast<std::ptrdiff_t>(N);
+  const double* W0 = rest_inverse.data();
+  const double* W2 = rest_inverse.data() + 2 * static_cast<std::ptrdiff_t>(N);
   for (int i = 0; i < N; ++i) w[i] -= W0[i] * Sv0 + W2[i] * Sv1;
   const double wx = w[0], wy = w[1];
   w[0] = c * wx - s * wy;
   w[1] = s * wx + c * wy;
   for (int i = 0; i < N; ++i) x_dot[i] = zd[i];
   return true;
+}
+
+}  // namespace
+
+bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                    const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  if (body_.geometric_stiffening()) return rhs_stiffened(d, x, commands);
+  // The equations of residual(), written as plain loops over raw arrays: this runs tens of
+  // thousands of times per simulation on vectors of 9 to 30 entries, where the setup of
+  // Eigen's dynamic-size kernels costs more than the arithmetic. The common sizes get a
+  // kernel of their own (NOA 6, the paper's, took 1 516 instructions a call at run-time
+  // size; docs/benchmarks.md).
+  switch (body_.n()) {
+    case 4: return full_rhs_kernel<4>(body_, rest_inverse_, d, x, commands, 4);
+    case 6: return full_rhs_kernel<6>(body_, rest_inverse_, d, x, commands, 6);
+    case 8: return full_rhs_kernel<8>(body_, rest_inverse_, d, x, commands, 8);
+    case 10: return full_rhs_kernel<10>(body_, rest_inverse_, d, x, commands, 10);
+    case 20: return full_rhs_kernel<20>(body_, rest_inverse_, d, x, commands, 20);
+    default: return full_rhs_kernel<0>(body_, rest_inverse_, d, x, commands, body_.n());
+  }
 }
 
 bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,

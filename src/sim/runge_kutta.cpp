@@ -198,12 +198,18 @@ class RungeKuttaStepper final : public detail::PieceStepper {
   /// Σ_r (Σ_j w_j k_j,r / sk_r)^2 over the model's components.
   double weighted_sum(const std::vector<Weight>& ws, const Eigen::VectorXd& y_new) const {
     const int N = n_ + nq_;
+    // Σ_j w_j k_j,r for all r at once, stage by stage (each component sums its terms in
+    // the same order as a loop over j per component would: the same bits, vectorizable)
+    e_sum_.setZero(n_);
+    double* __restrict e = e_sum_.data();
+    for (const Weight& w : ws) {
+      const double* __restrict k = K_.data() + static_cast<std::ptrdiff_t>(w.j) * N;
+      for (int r = 0; r < n_; ++r) e[r] += w.v * k[r];
+    }
     double sum = 0.0;
     for (int r = 0; r < n_; ++r) {
-      double e = 0.0;
-      for (const Weight& w : ws) e += w.v * K_.data()[static_cast<std::ptrdiff_t>(w.j) * N + r];
       const double sk = atol_[r] + options_.rtol * std::max(std::abs(y_[r]), std::abs(y_new[r]));
-      sum += (e / sk) * (e / sk);
+      sum += (e[r] / sk) * (e[r] / sk);
     }
     return sum;
   }
@@ -340,6 +346,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
   Eigen::VectorXd out_, quad_out_;  ///< the state at the time last reached, as the driver reads it
   Eigen::VectorXd y_, y_old_, stage_, x_quad_;
   Eigen::MatrixXd K_, Q_;           ///< stages (columns); dense output's coefficients
+  mutable Eigen::VectorXd e_sum_;   ///< scratch of weighted_sum
   double t_ = 0.0, t_old_ = 0.0, stop_ = 0.0, piece_mid_ = 0.0;
   double h_ = 0.0;       ///< the next step to try (0: to be chosen)
   double h_step_ = 0.0;  ///< of the last accepted step, [t_old_, t_]
