@@ -13,6 +13,7 @@
 
 #include "control/lyapunov_solvers.hpp"
 #include "freeflex/control/tvlqr.hpp"
+#include "util/finite.hpp"
 #include "util/format.hpp"
 
 namespace freeflex::detail {
@@ -40,11 +41,6 @@ inline void pack(const Eigen::MatrixXd& F, double* out) {
 }
 
 /// Everything the CVODES callbacks need; no exception leaves a callback.
-/// True when every entry is finite: x · 0 is 0 for a finite x and NaN for an infinite or
-/// NaN one, so one vectorizable pass (Eigen's allFinite compares x − x with itself entry
-/// by entry: 3% of a NOA-6 sweep).
-inline bool all_finite(const Eigen::Ref<const Eigen::MatrixXd>& a) { return (a.array() * 0.0).sum() == 0.0; }
-
 struct RiccatiData {
   LtvEvaluator* model = nullptr;
   double tf = 0.0;
@@ -110,7 +106,7 @@ struct RiccatiData {
            "; expected n = " + std::to_string(n) + ", m = " + std::to_string(m));
       return false;
     }
-    if (!all_finite(A) || !all_finite(B) || !all_finite(g)) {
+    if (!util::all_finite(A) || !util::all_finite(B) || !util::all_finite(g)) {
       fail("the model is not finite at t = " + util::format_number(t, 10));
       return false;
     }

@@ -13,6 +13,7 @@
 
 #include "sim/cvodes.hpp"
 #include "sim/stepper.hpp"
+#include "util/finite.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
@@ -68,7 +69,7 @@ extern "C" int freeflex_cvode_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void
                  "right-hand side failed at t = " + fmt(t) + ": " + detail::user_message(*data->system, "right-hand side"));
       return -1;
     }
-    if (!xdot.allFinite()) {
+    if (!util::all_finite(xdot)) {
       fail_callback(*data, "right-hand side returned a non-finite derivative at t = " + fmt(t));
       return -1;
     }

@@ -17,6 +17,7 @@
 
 #include "sim/rk_tableaus.hpp"
 #include "sim/stepper.hpp"
+#include "util/finite.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
@@ -144,7 +145,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         why_ = "right-hand side failed at t = " + fmt(t) + ": " + detail::user_message(system_, "right-hand side");
         return false;
       }
-      if (!k.head(n_).allFinite()) {
+      if (!util::all_finite(k.head(n_))) {
         why_ = "right-hand side returned a non-finite derivative at t = " + fmt(t);
         return false;
       }

@@ -13,6 +13,7 @@
 #include "util/format.hpp"
 #include "sim/modal_variables.hpp"
 #include "sim/range_check.hpp"
+#include "util/finite.hpp"
 
 namespace freeflex {
 namespace {
@@ -225,7 +226,7 @@ PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitat
                                      Eigen::Ref<Eigen::VectorXd> xd) {
     detail::evaluate_commands(excitation, at, *u);
     xd = zero.rhs(x, *u);
-    return xd.allFinite();
+    return util::all_finite(xd);
   };
   // The first-order model takes θ0'' and R0'' from the quintic interpolant of these
   // samples, which multiplies their errors by ~60/h²: at rtol 1e-8 the wiggle right after
@@ -313,7 +314,7 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
   fsys.rhs = [&first, &none, data](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
                                    Eigen::Ref<Eigen::VectorXd> xd) {
     xd = first.rhs(*data, at, x, none);
-    return xd.allFinite();
+    return util::all_finite(xd);
   };
   fsys.jacobian = [&first, data](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>&,
                                  Eigen::Ref<Eigen::MatrixXd> J) {
