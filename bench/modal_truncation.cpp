@@ -33,7 +33,7 @@ class CombinedBasis : public ShapeBasis {
   }
   std::vector<double> cuts() const override { return base_->cuts(); }
   double max_panel_width() const override { return base_->max_panel_width(); }
-  std::string name() const override { return base_->name(); }
+  std::string name() const override { return base_->name() + " (combined)"; }
 
  private:
   std::shared_ptr<const ShapeBasis> base_;
@@ -75,10 +75,8 @@ int main(int argc, char** argv) {
     }
     refs.push_back(ref);
     // Ritz modes at rest and T = M_rr⁻¹ M_rq (the rigid motion each q drags along)
-    const Eigen::MatrixXd M0 = full.mass_matrix(0.0, Eigen::VectorXd::Zero(n));
-    const Eigen::MatrixXd T = M0.topLeftCorner(3, 3).ldlt().solve(M0.topRightCorner(3, n));
-    const Eigen::MatrixXd Mc = full.integrals().M - M0.bottomLeftCorner(n, 3) * T;
-    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> modes(full.integrals().K, Mc);
+    const RestModes modes = rest_modes(full);
+    const Eigen::MatrixXd& T = modes.T;
     mean_axis.push_back(ref.z.col(2) + ref.z.middleCols(3, n) * T.row(2).transpose());
     const std::shared_ptr<const ShapeBasis> base(&full.basis(), [](const ShapeBasis*) {});
     std::vector<int> kept;
@@ -86,7 +84,7 @@ int main(int argc, char** argv) {
       if (k < n) kept.push_back(k);
     kept.push_back(n);  // all: the check that the combined basis is the same model
     for (int k : kept) {
-      const Eigen::MatrixXd V = modes.eigenvectors().leftCols(k);
+      const Eigen::MatrixXd V = modes.Phi.leftCols(k);
       const FlexibleBody reduced(beam, std::make_shared<CombinedBasis>(base, V), torque);
       const double t0 = cpu_ms();
       const SimulationResult s = simulate_full(reduced, pulse, options(1e-11, IntegratorOptions::Method::Verner98));
@@ -106,8 +104,8 @@ int main(int argc, char** argv) {
         e_q = std::max(e_q, (q_ref - q_red).cwiseAbs().maxCoeff());
       }
       std::printf("| %d | %d | %.0f | %s | %.2g | %.2g | %.2g | %.1f | %ld |\n", noa, k,
-                  std::sqrt(modes.eigenvalues()(k - 1)),
-                  k < n ? std::to_string(static_cast<long>(std::lround(std::sqrt(modes.eigenvalues()(k))))).c_str()
+                  std::sqrt(modes.omega2(k - 1)),
+                  k < n ? std::to_string(static_cast<long>(std::lround(std::sqrt(modes.omega2(k))))).c_str()
                         : "none",
                   e_theta, e_mean, e_q, t1 - t0, s.steps);
     }

@@ -123,12 +123,13 @@ const StateSpace& FirstOrderModel::state_space(Data& data, const Instant& at) co
   Eigen::MatrixXd& A = data.state_space.A;
   Eigen::MatrixXd& B = data.state_space.B;
   Eigen::VectorXd& g = data.state_space.g;
-  if (A.rows() != 2 * N || B.cols() != m) {  // the constant top rows, once per workspace
-    A.setZero(2 * N, 2 * N);
-    A.topRightCorner(N, N).setIdentity();
-    B.setZero(2 * N, m);
-    g.setZero(2 * N);
-  }
+  A.resize(2 * N, 2 * N);
+  B.resize(2 * N, m);
+  g.resize(2 * N);
+  A.topLeftCorner(N, N).setZero();
+  A.topRightCorner(N, N).setIdentity();
+  B.topRows(N).setZero();
+  g.head(N).setZero();
   A.bottomRows(N) = Y.leftCols(2 * N);
   B.bottomRows(N) = Y.middleCols(2 * N, m);
   g.tail(N) = Y.col(2 * N + m);

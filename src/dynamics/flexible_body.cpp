@@ -8,6 +8,7 @@
 
 #include "dynamics/body_kernels.hpp"
 #include "planar.hpp"
+#include "util/format.hpp"
 
 namespace freeflex {
 namespace {
@@ -286,6 +287,26 @@ void detail::add_element_force(const FlexibleBody& body, int e, double theta, co
 double FlexibleBody::vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& q,
                                       const Eigen::Ref<const Eigen::VectorXd>& q_dot) const {
   return 0.5 * q_dot.dot(M_condensed_ * q_dot) + 0.5 * q.dot(mi_.K * q);
+}
+
+RestModes rest_modes(const FlexibleBody& body) {
+  const int n = body.n();
+  const Eigen::MatrixXd M0 = body.mass_matrix(0.0, Eigen::VectorXd::Zero(n));
+  const Eigen::Matrix3d Mrr = M0.topLeftCorner<3, 3>();
+  const Eigen::MatrixXd Mrq = M0.topRightCorner(3, n);
+  RestModes r;
+  r.T = Mrr.ldlt().solve(Mrq);
+  r.M_c = M0.bottomRightCorner(n, n) - Mrq.transpose() * r.T;
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(body.integrals().K, r.M_c);
+  if (es.info() != Eigen::Success)
+    throw std::runtime_error("the elastic modes at rest could not be computed (the eigensolver failed)");
+  if (!(es.eigenvalues().array() > 0.0).all())
+    throw std::runtime_error("the elastic modes at rest could not be computed: the lowest ω² is " +
+                             util::format_number(es.eigenvalues().minCoeff(), 3) +
+                             ", not > 0 (do the beam's mass and stiffness span too many orders of magnitude?)");
+  r.Phi = es.eigenvectors();
+  r.omega2 = es.eigenvalues();
+  return r;
 }
 
 }  // namespace freeflex

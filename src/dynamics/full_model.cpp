@@ -1,6 +1,8 @@
 // The full nonlinear model (eq. 6.2): residual, right-hand side, invariants.
 #include "freeflex/dynamics/full_model.hpp"
 
+#include "dynamics/full_model_kernel.hpp"
+
 #include <cmath>
 #include <cstddef>
 
@@ -90,8 +92,9 @@ namespace {
 
 /// The body of FullModel::rhs for NN elastic coordinates known at compile time (NN > 0)
 /// or at run time (NN = 0, n given). The same operations in the same order either way, so
-/// the same bits: a fixed NN only lets the compiler unroll and vectorize the loops over
-/// entries (no reductions are reordered; the dot products stay sequential).
+/// the same bits with this file's flags (no contraction into fused multiply-adds, see
+/// CMakeLists.txt) and no -march: a fixed NN only lets the compiler unroll and vectorize
+/// the loops over entries (no reductions are reordered; the dot products stay sequential).
 template <int NN>
 bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
                      const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
@@ -170,6 +173,11 @@ bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inver
 }
 
 }  // namespace
+
+bool detail::full_rhs_runtime_size(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                   const Eigen::Ref<const Eigen::VectorXd>& commands) {
+  return full_rhs_kernel<0>(model.body(), model.rest_inverse(), d, x, commands, model.body().n());
+}
 
 bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                     const Eigen::Ref<const Eigen::VectorXd>& commands) const {

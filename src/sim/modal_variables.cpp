@@ -27,22 +27,12 @@ ModalVariables::ModalVariables(const FlexibleBody& body, PhysicalRhs physical,
     : n_(body.n()), N_(body.dofs()), physical_(std::move(physical)), frame_(std::move(frame)) {
   if (!physical_) throw std::invalid_argument("ModalVariables: the physical right-hand side is not set");
   const int n = n_, N = N_;
-  const Eigen::MatrixXd M0 = body.mass_matrix(0.0, Eigen::VectorXd::Zero(n));
-  const Eigen::Matrix3d Mrr = M0.topLeftCorner<3, 3>();
-  const Eigen::MatrixXd Mrq = M0.topRightCorner(3, n);
-  T_ = Mrr.ldlt().solve(Mrq);
   // Elastic mass with the rigid momenta held (Schur complement) and the modes at rest.
-  const Eigen::MatrixXd Mc = M0.bottomRightCorner(n, n) - Mrq.transpose() * T_;
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(body.integrals().K, Mc);
-  if (es.info() != Eigen::Success)
-    throw std::runtime_error("the elastic modes at rest could not be computed (the eigensolver failed)");
-  if (!(es.eigenvalues().array() > 0.0).all())
-    throw std::runtime_error("the elastic modes at rest could not be computed: the lowest ω² is " +
-                             util::format_number(es.eigenvalues().minCoeff(), 3) +
-                             ", not > 0 (do the beam's mass and stiffness span too many orders of magnitude?)");
-  Phi_ = es.eigenvectors();  // Φᵀ M_c Φ = I
-  Phi_inv_ = Phi_.transpose() * Mc;
-  omega2_ = es.eigenvalues();
+  const RestModes modes = rest_modes(body);
+  T_ = modes.T;
+  Phi_ = modes.Phi;  // Φᵀ M_c Φ = I
+  Phi_inv_ = Phi_.transpose() * modes.M_c;
+  omega2_ = modes.omega2;
   omega_ = omega2_.cwiseSqrt();
   // Modal damping enters the reference oscillators (decay of a, b); a mode damped at or
   // above critical keeps its damping in the modal force instead.

@@ -157,7 +157,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         } else {
           ok = system_.quadrature(at, y.head(n_), k.tail(nq_));
         }
-        if (!ok || !k.tail(nq_).allFinite()) {
+        if (!ok || !util::all_finite(k.tail(nq_))) {
           why_ = "the quadrature integrand failed or was not finite at t = " + fmt(t);
           return false;
         }

@@ -6,6 +6,7 @@
 
 #include "freeflex/dynamics/first_order.hpp"
 #include "freeflex/dynamics/full_model.hpp"
+#include "dynamics/full_model_kernel.hpp"
 #include "support/bodies.hpp"
 #include "support/fixed_trajectory.hpp"
 
@@ -207,4 +208,59 @@ TEST_CASE("a body on a caller's basis is the body on that basis, and no basis is
   const Eigen::VectorXd q = Eigen::VectorXd::LinSpaced(6, -0.1, 0.2);
   CHECK(given.element_force(0, 0.3, q) == named.element_force(0, 0.3, q));
   CHECK_THROWS_WITH(FlexibleBody(beam, std::shared_ptr<const ShapeBasis>(), torque), Catch::Contains("no shape basis"));
+}
+
+TEST_CASE("the full model's kernels for fixed sizes give the run-time kernel's numbers", "[dynamics]") {
+  // FullModel::rhs compiles its loops for 4, 6, 8, 10 and 20 elastic coordinates; with
+  // the same operations in the same order they must give the same bits as the kernel of
+  // run-time size (the paper designs' CSVs depend on it). A build with -march (FMA, wider
+  // vectors) may round differently: there the bound is round-off (1e-12 relative).
+#if defined(__FMA__) || defined(__AVX__)
+  const double tol = 1e-12;  // vectorized and fused code rounds differently
+#else
+  const double tol = 0.0;  // same operations, same order: same bits
+#endif
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int n : {4, 6, 8, 10, 20}) {
+    const FlexibleBody body = rich_body(n, {0.01, 0.02});
+    const FullModel model(body);
+    FullModel::Data a = model.create_data(), b = model.create_data();
+    const int N = body.dofs();
+    for (int trial = 0; trial < 200; ++trial) {
+      Eigen::VectorXd x(2 * N), u(body.elements().size());
+      for (int i = 0; i < 2 * N; ++i) x(i) = U(gen) * (i < 3 || (i >= N && i < N + 3) ? 3.0 : 0.05);
+      for (int e = 0; e < u.size(); ++e) u(e) = U(gen);
+      REQUIRE(model.rhs(a, x, u));
+      REQUIRE(detail::full_rhs_runtime_size(model, b, x, u));
+      const double scale = b.x_dot.cwiseAbs().maxCoeff();
+      INFO("n = " << n << ", trial " << trial);
+      CHECK((a.x_dot - b.x_dot).cwiseAbs().maxCoeff() <= tol * scale);
+    }
+  }
+}
+
+TEST_CASE("one workspace serves the first-order state space at every instant and input count", "[dynamics]") {
+  // state_space(data, at) rewrites all of A, B, g each call: a workspace reused across
+  // models with other inputs, or whose matrices a caller changed, gives a fresh one's answer
+  const FlexibleBody body = rich_body(6, {0.02});
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const FixedTrajectory traj(freeflex_test::random_rigid_state(rng, U));
+  const auto nominal = [](const Instant&, Eigen::Ref<Eigen::VectorXd> u) { u.setConstant(0.3); };
+  const FirstOrderModel two(body, traj, nominal, {1, 2});
+  const FirstOrderModel three(body, traj, nominal, {0, 1, 3});
+  FirstOrderModel::Data data = two.create_data();
+  for (int trial = 0; trial < 4; ++trial) {
+    const FirstOrderModel& model = trial % 2 ? three : two;
+    const Instant at = Instant::at(0.21 * trial);
+    data.state_space.A.setConstant(7.0);  // a caller's scribbles
+    data.state_space.B.setConstant(7.0);
+    data.state_space.g.setConstant(7.0);
+    const StateSpace& reused = model.state_space(data, at);
+    const StateSpace fresh = model.state_space(at);
+    CHECK(reused.A == fresh.A);
+    CHECK(reused.B == fresh.B);
+    CHECK(reused.g == fresh.g);
+  }
 }

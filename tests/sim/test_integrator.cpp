@@ -16,6 +16,7 @@
 #include "support/systems.hpp"
 #include "freeflex/sim/integrator.hpp"
 #include "sim/fast_nvector.hpp"
+#include "util/finite.hpp"
 #include "support/integration.hpp"
 
 using namespace freeflex_test;
@@ -481,4 +482,23 @@ TEST_CASE("a work budget shared by integrations stops the one that spends it and
   CHECK_FALSE(fewer.ok());
   CHECK(fewer.steps == 400);  // 400 x 800 units
   CHECK_THROWS_WITH(WorkBudget(0, "none"), Contains("units = 0, expected > 0"));
+}
+
+TEST_CASE("util::all_finite tells finite from infinite and NaN entries", "[sim]") {
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  const double big = std::numeric_limits<double>::max();
+  Eigen::MatrixXd a = Eigen::MatrixXd::Constant(5, 4, big);  // a sum of the entries would overflow
+  a(2, 1) = -big;
+  a(0, 0) = -0.0;
+  CHECK(freeflex::util::all_finite(a));
+  CHECK(freeflex::util::all_finite(Eigen::VectorXd()));  // no entries
+  for (double bad : {inf, -inf, nan}) {
+    Eigen::MatrixXd b = a;
+    b(4, 3) = bad;
+    CHECK_FALSE(freeflex::util::all_finite(b));
+    CHECK_FALSE(freeflex::util::all_finite(b.col(3)));
+    CHECK_FALSE(freeflex::util::all_finite(b.row(4)));          // a strided view
+    CHECK(freeflex::util::all_finite(b.topLeftCorner(4, 3)));   // the bad entry outside the block
+    CHECK(freeflex::util::all_finite(b.row(4).head(3)));
+  }
 }

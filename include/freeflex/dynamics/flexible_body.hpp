@@ -93,4 +93,16 @@ class FlexibleBody {
   bool stiffening_ = false;
 };
 
+/// The elastic modes of a body at rest with the rigid momenta held (docs/theory.md
+/// section 8): T = M_rr⁻¹ M_rq (the rigid motion each q drags along), the Schur complement
+/// M_c = M_qq − M_qr T, and K φ = ω² M_c φ with Φᵀ M_c Φ = I, ω² ascending. Throws
+/// std::runtime_error when the eigensolver fails or the lowest ω² is not positive.
+struct RestModes {
+  Eigen::MatrixXd T;       ///< 3 x n
+  Eigen::MatrixXd M_c;     ///< n x n
+  Eigen::MatrixXd Phi;     ///< n x n, columns the modes: q = Φ η
+  Eigen::VectorXd omega2;  ///< ω², ascending [rad²/s²]
+};
+RestModes rest_modes(const FlexibleBody& body);
+
 }  // namespace freeflex

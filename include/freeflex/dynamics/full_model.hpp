@@ -24,6 +24,8 @@ class FullModel {
   /// Factors the body-frame mass matrix at rest once (see rhs).
   explicit FullModel(const FlexibleBody& body);
   const FlexibleBody& body() const { return body_; }
+  /// 𝕄_b(0)⁻¹, the body-frame mass matrix at rest inverted once (see rhs).
+  const Eigen::MatrixXd& rest_inverse() const { return rest_inverse_; }
   int state_size() const { return 2 * body_.dofs(); }
   Data create_data() const;
 
