@@ -5,8 +5,6 @@
 #include <stdexcept>
 #include <utility>
 
-#include "util/format.hpp"
-
 namespace freeflex {
 namespace {
 

@@ -36,7 +36,8 @@ ReplayCheck check_replay(const FlexibleBody& body, const ManeuverProblem& proble
   o.atol = 1e-12;
   // The commands are a polynomial on each of the mesh's intervals, so the replay restarts
   // at every knot: an explicit pair starts each piece at its full order, where CVODES's
-  // Adams climbs from order 1 with short steps (about 5 times the work on the shipped slew).
+  // Adams climbs from order 1 with short steps (twice the instructions on the 80-interval
+  // slew: 14.0 M against 6.7 M, docs/benchmarks.md).
   o.method = IntegratorOptions::Method::Verner98;
   const IntegrationResult rep = replay_open_loop(body, problem, result, o);
   ReplayCheck c;
