@@ -1,0 +1,145 @@
+// Not a benchmark: a probe of one way the perturbation solution might stop following the
+// highest elastic mode step by step (issue 19, "cost that grows gently with NOA"). The
+// first-order model is linear, x' = A(t) x + g(t), so a Magnus integrator can advance it
+// with exact matrix exponentials: the fourth-order two-point Gauss scheme
+//   Ω = h/2 (Ã1 + Ã2) + √3 h²/12 [Ã2, Ã1],   [x; 1] ← exp(Ω) [x; 1],
+// Ã = [[A, g], [0, 0]] at the Gauss points, fixed steps per piece of the loads. The
+// state is first taken to coordinates where the exponential is well scaled: rotated with
+// the nominal angle (A then changes only with θ0', θ0''), the rigid coordinates shifted by
+// the rigid motion the deformation carries, and q in the body's rest modes with the
+// rates divided by ω (docs/theory.md section 8, modal integration variables). The errors
+// in θ and q against the perturbation solution at rtol 1e-13 show whether long steps pay:
+// they do not (docs/benchmarks.md, "a Magnus probe").
+//
+//   build/bench/magnus_probe [NOA] [steps per piece...]   (default: 20; 20 40 ... 1280)
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include "freeflex/dynamics/first_order.hpp"
+#include "freeflex/sim/simulate.hpp"
+
+using namespace freeflex;
+
+int main(int argc, char** argv) {
+  const int noa = argc > 1 ? std::atoi(argv[1]) : 20;
+  std::vector<int> counts;
+  for (int i = 2; i < argc; ++i) counts.push_back(std::atoi(argv[i]));
+  if (counts.empty()) counts = {20, 40, 80, 160, 320, 640, 1280};
+  if (noa < 1 || noa > 60) {
+    std::fprintf(stderr, "magnus_probe: NOA must be 1..60\n");
+    return 2;
+  }
+  for (int c : counts)
+    if (c < 1) {
+      std::fprintf(stderr, "magnus_probe: steps per piece must be positive\n");
+      return 2;
+    }
+
+  // The paper's moment example: +1 N m at the centre for 0.5 s, -1 N m for 0.5 s, then free.
+  const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+  const FlexibleBody body(beam, noa, {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}});
+  const Excitation ex{{TimeProfile(TimeProfile::Kind::Steps, {0.0, 0.5, 1.0}, {1.0, -1.0})}};
+  SimulationOptions o;
+  o.duration_s = 3.0;
+  o.output_step_s = 0.5;
+  o.integrator.rtol = 1e-13;
+  o.integrator.atol = 1e-15;
+  const PerturbationResult ref = simulate_perturbation(body, ex, o);
+  if (!ref.total.ok()) {
+    std::fprintf(stderr, "magnus_probe: the reference failed: %s\n", ref.total.message.c_str());
+    return 1;
+  }
+  const RigidTrajectory& nominal = *ref.nominal;
+  const FirstOrderModel first(
+      body, nominal, [&ex](const Instant& at, Eigen::Ref<Eigen::VectorXd> c) { c = ex.commands(at); }, {});
+  FirstOrderModel::Data data = first.create_data();
+
+  // x = S y: rigid shifted by T q, q = Φ η, q' = Φ diag(ω) ν (and the same for the rates);
+  // S⁻¹ from Φᵀ M_c Φ = I, so that no ill-conditioned inverse is formed.
+  const int N = body.dofs(), n = 2 * N, ne = N - 3;
+  const RestModes rm = rest_modes(body);
+  const Eigen::VectorXd omega = rm.omega2.cwiseSqrt();
+  const Eigen::MatrixXd Phi_inv = rm.Phi.transpose() * rm.M_c;
+  Eigen::MatrixXd S = Eigen::MatrixXd::Identity(n + 1, n + 1), S_inv = S;
+  S.block(3, 3, ne, ne) = rm.Phi;
+  S.block(0, 3, 3, ne) = -rm.T * rm.Phi;
+  S.block(N + 3, N + 3, ne, ne) = rm.Phi * omega.asDiagonal();
+  S.block(N, N + 3, 3, ne) = -rm.T * rm.Phi * omega.asDiagonal();
+  S_inv.block(3, 3, ne, ne) = Phi_inv;
+  S_inv.block(0, 3, 3, ne) = rm.T;
+  S_inv.block(N + 3, N + 3, ne, ne) = omega.cwiseInverse().asDiagonal() * Phi_inv;
+  S_inv.block(N, N + 3, 3, ne) = rm.T;
+
+  // rotation of R1 and its rate by the nominal angle; with θ0' its derivative term
+  auto rotation = [&](double angle, double rate, Eigen::MatrixXd& Rot, Eigen::MatrixXd& Rdot) {
+    Rot.setIdentity(n + 1, n + 1);
+    Rdot.setZero(n + 1, n + 1);
+    const double c = std::cos(angle), s = std::sin(angle);
+    for (int i : {0, N}) {
+      Rot.block(i, i, 2, 2) << c, -s, s, c;
+      Rdot.block(i, i, 2, 2) << 0.0, -rate, rate, 0.0;  // Rotᵀ Rot'
+    }
+  };
+  // Ã(t) in the scaled, rotating coordinates y
+  auto augmented = [&](double t, double piece_mid, Eigen::MatrixXd& M) {
+    const Instant at{t, piece_mid};
+    const StateSpace& ss = first.state_space(data, at);
+    M.setZero(n + 1, n + 1);
+    M.topLeftCorner(n, n) = ss.A;
+    M.topRightCorner(n, 1) = ss.g;
+    const RigidState st = nominal.at(at);
+    Eigen::MatrixXd Rot, Rdot;
+    rotation(st.pos(2), st.vel(2), Rot, Rdot);
+    M = S_inv * (Rot.transpose() * M * Rot - Rdot) * S;
+  };
+
+  std::printf("NOA %d, omega_max %.0f rad/s; errors against the perturbation solution at rtol 1e-13\n\n", noa,
+              omega.maxCoeff());
+  std::printf("| steps a piece | h omega_max (0-1 s) | error theta at 1 s | at 3 s | error q at 3 s | exponentials | CPU [ms] |\n");
+  std::printf("| --- | --- | --- | --- | --- | --- | --- |\n");
+  const double ends[] = {0.0, 0.5, 1.0, 3.0};
+  const double c1 = 0.5 - std::sqrt(3.0) / 6.0, c2 = 0.5 + std::sqrt(3.0) / 6.0;
+  for (int per_piece : counts) {
+    const auto start = std::chrono::steady_clock::now();
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(n + 1);
+    y[n] = 1.0;
+    Eigen::MatrixXd A1, A2, Omega;
+    double err_theta[4] = {0, 0, 0, 0}, err_q = 0.0;
+    long exponentials = 0;
+    for (int p = 0; p < 3; ++p) {
+      const double a = ends[p], b = ends[p + 1], mid = 0.5 * (a + b), h = (b - a) / per_piece;
+      for (int k = 0; k < per_piece; ++k) {
+        const double t = a + k * h;
+        augmented(t + c1 * h, mid, A1);
+        augmented(t + c2 * h, mid, A2);
+        Omega = 0.5 * h * (A1 + A2) + (std::sqrt(3.0) * h * h / 12.0) * (A2 * A1 - A1 * A2);
+        y = Eigen::MatrixXd(Omega.exp()) * y;
+        ++exponentials;
+      }
+      // back to x at the piece's end and against the reference's output there
+      Eigen::VectorXd x = S * y;
+      const RigidState st = nominal.at(Instant{b, mid});
+      const double c = std::cos(st.pos(2)), s = std::sin(st.pos(2));
+      for (int i : {0, N}) {
+        const Eigen::Vector2d v = x.segment<2>(i);
+        x(i) = c * v(0) - s * v(1);
+        x(i + 1) = s * v(0) + c * v(1);
+      }
+      int row = -1;
+      for (int i = 0; i < ref.total.t.size(); ++i)
+        if (std::abs(ref.total.t[i] - b) < 1e-12) row = i;
+      err_theta[p + 1] = std::abs(x[2] + ref.zero_order.z(row, 2) - ref.total.z(row, 2));
+      if (p == 2) err_q = (x.segment(3, ne) - ref.total.z.row(row).segment(3, ne).transpose()).cwiseAbs().maxCoeff();
+    }
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    std::printf("| %d | %.3g | %.2e | %.2e | %.2e | %ld | %.0f |\n", per_piece, 0.5 / per_piece * omega.maxCoeff(),
+                err_theta[2], err_theta[3], err_q, exponentials, ms);
+  }
+  return 0;
+}
