@@ -5,7 +5,10 @@
 // Euclidean) and c(t0), with CPU time (minimum of `reps` runs) and steps, for both
 // methods and the given NOA. The reference is today's BDF at rtol 1e-12 (its own error,
 // against rtol 1e-13: K 1e-9, u_ff 7e-8 at NOA 6; K 1.2e-8, u_ff 1.3e-5 at NOA 20).
-//   build/bench/tvlqr_accuracy [noa] [reps]
+// The runs take TvlqrOptions' default atol (1e-10, relative to the largest weight) unless
+// a third argument gives another: at NOA 20 that atol, not rtol, sets the error in K
+// (docs/benchmarks.md, TV-LQR).
+//   build/bench/tvlqr_accuracy [noa] [reps] [atol]
 #include <time.h>
 
 #include <algorithm>
@@ -48,6 +51,11 @@ Errors compare(const TvlqrResult& r, const TvlqrResult& ref) {
 int main(int argc, char** argv) {
   const int noa = argc > 1 ? std::atoi(argv[1]) : 6;
   const int reps = argc > 2 ? std::atoi(argv[2]) : 3;
+  const double atol = argc > 3 ? std::atof(argv[3]) : TvlqrOptions{}.atol;
+  if (noa < 1 || reps < 1 || !(atol > 0.0)) {
+    std::cerr << "usage: tvlqr_accuracy [noa >= 1] [reps >= 1] [atol > 0]\n";
+    return 2;
+  }
   const auto c = moment_case(noa);
   TvlqrOptions ro;
   ro.method = TvlqrOptions::Method::Bdf;  // the reference: today's method, tight
@@ -57,6 +65,7 @@ int main(int argc, char** argv) {
   const TvlqrResult ref = solve_tvlqr(*c->model, 0.0, 3.0, c->Q, c->R, ro);
   std::cerr << "reference: " << ref.message << ", " << ref.steps << " steps, " << cpu_seconds() - t << " s CPU\n";
   if (!ref.ok()) return 1;
+  std::cout << "atol " << atol << "\n\n";
   std::cout << "| NOA | method | rtol | K error | u_ff error | P0 error | s0 error | c0 error | CPU [ms] | steps | RHS |\n"
                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   using M = TvlqrOptions::Method;
@@ -65,6 +74,7 @@ int main(int argc, char** argv) {
       TvlqrOptions o;
       o.method = method;
       o.rtol = rtol;
+      o.atol = atol;
       TvlqrResult r;
       double best = 1e300;
       for (int k = 0; k < reps; ++k) {
