@@ -304,12 +304,11 @@ NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, c
     opts.SetStringValue("linear_solver", "mumps");
   }
   if (warm) opts.SetNumericValue("mu_init", 1e-6);  // start close to the central path of a near-optimal point
-  // A cold start (no near-optimal guess) takes the constraint multipliers at zero instead
-  // of Ipopt's least-squares estimate, which costs a factorization of a matrix of its own
-  // before the first iteration and is of little use far from the optimum (docs/benchmarks.md,
-  // the whole run of the slew). A warm start keeps the estimate: from a near-optimal primal
-  // point it is near the optimal duals, and mesh refinement's rounds need it.
-  if (!warm) opts.SetNumericValue("constr_mult_init_max", 0.0);
+  // The constraint multipliers start at zero instead of Ipopt's least-squares estimate,
+  // which costs a factorization of a matrix of its own before the first iteration; with
+  // zeros the maneuvers of bench_trajopt took the same iterations with the default LDLᵀ
+  // (docs/benchmarks.md, "The whole `freeflex run` of the slew").
+  opts.SetNumericValue("constr_mult_init_max", 0.0);
   for (const auto& kv : o.ipopt_options) set_user_option(*app, kv.first, kv.second);
 
   NlpSolve run;

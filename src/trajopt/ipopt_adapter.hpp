@@ -22,8 +22,9 @@ struct NlpSolve {
 };
 
 /// Solves `nlp` from `w0` with the options of TrajoptOptions (trajopt/solve.hpp says which
-/// Ipopt options freeflex sets); the derivative test runs only with `check_derivatives`,
-/// and `warm` starts close to the central path (mu_init 1e-6). Throws
+/// Ipopt options freeflex sets, constr_mult_init_max 0 among them); the derivative test
+/// runs only with `check_derivatives`, and `warm` starts close to the central path
+/// (mu_init 1e-6). Throws
 /// std::invalid_argument for an Ipopt option Ipopt does not know or rejects.
 NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const TrajoptOptions& options,
                          bool check_derivatives, bool warm);

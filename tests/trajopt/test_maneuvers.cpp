@@ -247,6 +247,7 @@ TEST_CASE("mesh refinement drives the error estimate below its tolerance", "[tra
   o.intervals = 20;
   o.mesh_refinements = 6;
   o.mesh_tolerance = 1e-4;
+  o.coarse_start = false;  // the first round from the straight line: the warm rounds are compared with a cold one
   const TrajoptResult r = solve_maneuver(body, p, o);
   INFO(r.message);
   REQUIRE(r.ok());
@@ -281,8 +282,8 @@ TEST_CASE("warm starts and control guesses", "[trajopt]") {
   REQUIRE(cold.ok());
   CHECK_FALSE(cold.warm_started);
 
-  // By default a problem given no guess starts from its own solution on a quarter of the
-  // mesh (10 intervals here) and continues at mu_init 1e-6: the same optimum, fewer
+  // By default a problem given no guess starts from its own solution on an eighth of the
+  // mesh (at least 10 intervals: 10 here) and continues at mu_init 1e-6: the same optimum, fewer
   // iterations on the fine mesh.
   TrajoptOptions coarse = o;
   coarse.coarse_start = true;
