@@ -189,7 +189,7 @@ void check_ipopt_work(Section& m, const ManeuverStudy& st, int noa) {
     return;
   }
   // the coarse start (TrajoptOptions::coarse_start): the rigid problem (or, for an elastic
-  // one, its rigid counterpart's own) on max(10, N/4) intervals, at most 500 iterations
+  // one, its rigid counterpart's own) on max(10, N/8) intervals, at most 500 iterations
   double coarse = 0.0, coarse_unknowns = 0.0;
   const int nc = o.coarse_start_intervals();
   if (o.coarse_start && nc < o.intervals && iterations > 0) {

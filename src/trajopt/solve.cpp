@@ -65,8 +65,8 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
     opts = &tuned;
   }
   // A problem given no guess starts from a coarse solution: the rigid problem (a rigid
-  // one itself, an elastic one its rigid counterpart) solved first on a quarter of the
-  // mesh. From the straight line Ipopt's early iterations need large Hessian
+  // one itself, an elastic one its rigid counterpart) solved first on an eighth of the
+  // mesh (TrajoptOptions::coarse_start_intervals). From the straight line Ipopt's early iterations need large Hessian
   // regularizations (δ_w of 1-100 for the slews of docs/benchmarks.md, each costing
   // extra factorizations); from the coarse optimum the rigid slew at N = 100 takes 11-15 ms
   // instead of 26-28 (the coarse solve included), the elastic slew 11 iterations instead

@@ -164,12 +164,13 @@ TEST_CASE("an elastic maneuver's NLP is bounded in size and its derivatives coun
   };
   // 71 unknowns a point (6 + 4 + 2 x 30 states, one control): 495 points x 71² = 2495295
   // and each iteration 35145 unknowns + 495 x (71³ / 100 - 4 x 71) + the rigid
-  // counterpart's 3465 + its coarse start's 123 x 7 = 861 = 1670550.45: at most 26 iterations
+  // counterpart's 3465 + its coarse start's (30 intervals) 61 x 7 = 427 = 1670116.45: at
+  // most 26 iterations
   CHECK(problems_of(elastic(247, 26)).empty());
   CHECK_THAT(problems_of(elastic(247, 27)),
              Contains("line 16: maneuver.max_iterations = 27 with intervals = 247 and mesh_refinements = 0 allows "
-                      "45104863 Ipopt iteration-unknowns (iterations x NLP unknowns, 35145 unknowns over the rounds, the "
-                      "coarse start's 861 for at most 500 iterations (coarse_start = false drops it), the "
+                      "45093145 Ipopt iteration-unknowns (iterations x NLP unknowns, 35145 unknowns over the rounds, the "
+                      "coarse start's 427 for at most 500 iterations (coarse_start = false drops it), the "
                       "elastic derivatives counted as 1631080 more (s³/100 - 4 s at each point of s = 71 unknowns) and "
                       "the rigid counterpart's 3465); at most 4.5e+07"));
   // few elastic modes cost like the rigid problem's unknowns (s = 16: nothing more), but
@@ -180,10 +181,10 @@ TEST_CASE("an elastic maneuver's NLP is bounded in size and its derivatives coun
            "\n[maneuver.final]\ntheta_deg = 90.0\n";
   };
   // 401 points of 15 unknowns (6015), the rigid counterpart's 401 x 7 = 2807 and its coarse
-  // start's 101 x 7 = 707 for at most 500 iterations: 5060 iterations
-  CHECK(problems_of(few(5060)).empty());
-  CHECK_THAT(problems_of(few(5061)), Contains("allows 45001643 Ipopt iteration-unknowns (iterations x NLP unknowns, "
-                                              "6015 unknowns over the rounds, the coarse start's 707 for at most 500 "
+  // start's (25 intervals) 51 x 7 = 357 for at most 500 iterations: 5080 iterations
+  CHECK(problems_of(few(5080)).empty());
+  CHECK_THAT(problems_of(few(5081)), Contains("allows 45003082 Ipopt iteration-unknowns (iterations x NLP unknowns, "
+                                              "6015 unknowns over the rounds, the coarse start's 357 for at most 500 "
                                               "iterations (coarse_start = false drops it), the elastic derivatives "
                                               "counted as 0 more"));
   CHECK_THAT(problems_of(elastic(248, 2)),

@@ -159,7 +159,7 @@ struct TrajoptOptions {
   /// A problem given no guess (neither `guess.solution` nor `guess.control`) starts from
   /// a coarse solution: the rigid problem (a rigid problem itself, an elastic one its
   /// rigid counterpart, rigid_counterpart(): the same objective and limits without the
-  /// elastic part) solved first on min(N, max(10, N / 4)) intervals with at most
+  /// elastic part) solved first on min(N, max(10, N / 8)) intervals with at most
   /// min(max_iter, 500) iterations. A rigid problem then continues from it as a
   /// mesh-refinement round does (Ipopt's mu_init 1e-6; skipped when the coarse mesh would
   /// not be coarser); an elastic one from the default barrier with its elastic state at
@@ -171,7 +171,10 @@ struct TrajoptOptions {
   bool coarse_start = true;
   static constexpr int coarse_start_max_iter = 500;
   /// The coarse mesh of coarse_start (used only when coarser than `intervals`).
-  int coarse_start_intervals() const { return std::max(10, intervals / 4); }
+  /// An eighth of the mesh: on the rigid slews of bench_trajopt 3-25% less work than a
+  /// quarter (the fine mesh takes one iteration more, the coarse solve far less;
+  /// docs/benchmarks.md).
+  int coarse_start_intervals() const { return std::max(10, intervals / 8); }
   bool keep_log = false;  ///< copy Ipopt's log (of every solve) into TrajoptResult::log
   int log_level = 5;      ///< Ipopt print level of that copy (0-12)
 };

@@ -5,7 +5,10 @@
 // with its internal scaling off (mumps_scaling 0: robust to boundary conditions that
 // repeat what the dynamics fix, and faster), a 20% workspace margin (mumps_mem_percent
 // 20; Ipopt raises it on demand) and the AMF ordering (mumps_pivot_order 2: linear cost
-// in N). TrajoptOptions::ipopt_options override any of these. Mesh-refinement rounds start at mu_init 1e-6 from the interpolated solution.
+// in N), and the constraint multipliers started at zero (constr_mult_init_max 0: no
+// least-squares estimate, which costs a factorization of its own). TrajoptOptions::
+// ipopt_options override any of these. Mesh-refinement rounds, and the full mesh after a
+// rigid problem's coarse start, start at mu_init 1e-6 from the interpolated solution.
 //
 //   TrajoptResult r = solve_maneuver(body, problem, options);
 //   if (r.ok()) r.trajectory->at(Instant::at(t));  // a RigidTrajectory
