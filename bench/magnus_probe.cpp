@@ -27,9 +27,15 @@
 using namespace freeflex;
 
 int main(int argc, char** argv) {
-  const int noa = argc > 1 ? std::atoi(argv[1]) : 20;
+  // whole numbers only: "6abc" is refused, not read as 6
+  auto whole = [](const char* a) {
+    char* end = nullptr;
+    const long v = std::strtol(a, &end, 10);
+    return end != a && *end == '\0' && v > 0 && v < 1000000 ? static_cast<int>(v) : -1;
+  };
+  const int noa = argc > 1 ? whole(argv[1]) : 20;
   std::vector<int> counts;
-  for (int i = 2; i < argc; ++i) counts.push_back(std::atoi(argv[i]));
+  for (int i = 2; i < argc; ++i) counts.push_back(whole(argv[i]));
   if (counts.empty()) counts = {20, 40, 80, 160, 320, 640, 1280};
   if (noa < 1 || noa > 60) {
     std::fprintf(stderr, "magnus_probe: NOA must be 1..60\n");
@@ -101,7 +107,7 @@ int main(int argc, char** argv) {
 
   std::printf("NOA %d, omega_max %.0f rad/s; errors against the perturbation solution at rtol 1e-13\n\n", noa,
               omega.maxCoeff());
-  std::printf("| steps a piece | h omega_max (0-1 s) | error theta at 1 s | at 3 s | error q at 3 s | exponentials | CPU [ms] |\n");
+  std::printf("| steps a piece | h omega_max (0-1 s) | error theta at 1 s | at 3 s | error q at 3 s | exponentials | wall [ms] |\n");
   std::printf("| --- | --- | --- | --- | --- | --- | --- |\n");
   const double ends[] = {0.0, 0.5, 1.0, 3.0};
   const double c1 = 0.5 - std::sqrt(3.0) / 6.0, c2 = 0.5 + std::sqrt(3.0) / 6.0;
@@ -134,6 +140,10 @@ int main(int argc, char** argv) {
       int row = -1;
       for (int i = 0; i < ref.total.t.size(); ++i)
         if (std::abs(ref.total.t[i] - b) < 1e-12) row = i;
+      if (row < 0) {
+        std::fprintf(stderr, "magnus_probe: the reference has no output at t = %g s\n", b);
+        return 1;
+      }
       err_theta[p + 1] = std::abs(x[2] + ref.zero_order.z(row, 2) - ref.total.z(row, 2));
       if (p == 2) err_q = (x.segment(3, ne) - ref.total.z.row(row).segment(3, ne).transpose()).cwiseAbs().maxCoeff();
     }
