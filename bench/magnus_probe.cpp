@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
   }
   for (int c : counts)
     if (c < 1) {
-      std::fprintf(stderr, "magnus_probe: steps per piece must be positive\n");
+      std::fprintf(stderr, "magnus_probe: steps per piece must be whole numbers in 1..999999\n");
       return 2;
     }
 

@@ -68,7 +68,7 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
   // one itself, an elastic one its rigid counterpart) solved first on an eighth of the
   // mesh (TrajoptOptions::coarse_start_intervals). From the straight line Ipopt's early iterations need large Hessian
   // regularizations (δ_w of 1-100 for the slews of docs/benchmarks.md, each costing
-  // extra factorizations); from the coarse optimum the rigid slew at N = 100 takes 11-15 ms
+  // extra factorizations); from the coarse optimum (then a quarter of the mesh) the rigid slew at N = 100 took 11-15 ms
   // instead of 26-28 (the coarse solve included), the elastic slew 11 iterations instead
   // of 19 and 35-45% less time. A rigid problem continues as a mesh-refinement round does
   // (mu_init 1e-6); an elastic one from the default barrier, its elastic state at rest.

@@ -171,8 +171,8 @@ struct TrajoptOptions {
   bool coarse_start = true;
   static constexpr int coarse_start_max_iter = 500;
   /// The coarse mesh of coarse_start (used only when coarser than `intervals`).
-  /// An eighth of the mesh: on the rigid slews of bench_trajopt 3-25% less work than a
-  /// quarter (the fine mesh takes one iteration more, the coarse solve far less;
+  /// An eighth of the mesh: on the rigid slews of bench_trajopt 2.5-25% less work than a
+  /// quarter (the fine mesh takes one or two iterations more, the coarse solve far less;
   /// docs/benchmarks.md).
   int coarse_start_intervals() const { return std::max(10, intervals / 8); }
   bool keep_log = false;  ///< copy Ipopt's log (of every solve) into TrajoptResult::log
