@@ -296,7 +296,7 @@ RestModes rest_modes(const FlexibleBody& body) {
   const Eigen::MatrixXd Mrq = M0.topRightCorner(3, n);
   RestModes r;
   r.T = Mrr.ldlt().solve(Mrq);
-  r.M_c = M0.bottomRightCorner(n, n) - Mrq.transpose() * r.T;
+  r.M_c = body.condensed_mass();  // M_qq − M_qr T, formed once by the body
   Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> es(body.integrals().K, r.M_c);
   if (es.info() != Eigen::Success)
     throw std::runtime_error("the elastic modes at rest could not be computed (the eigensolver failed)");

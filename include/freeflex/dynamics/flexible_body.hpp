@@ -75,6 +75,9 @@ class FlexibleBody {
   const Eigen::MatrixXd& damping() const { return D_; }
   bool damped() const { return damped_; }
 
+  /// M_c, the mass seen by q when the rigid momenta are held: the Schur complement of the
+  /// rigid block of the mass matrix at rest (eq. 6.8), n x n.
+  const Eigen::MatrixXd& condensed_mass() const { return M_condensed_; }
   /// Energy of the elastic motion alone, eq. 6.8: 1/2 q'ᵀ M_c q' + 1/2 qᵀ K q, with M_c
   /// the mass seen by q when the rigid momenta are held (Schur complement).
   double vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& q,
