@@ -9,6 +9,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <string>
@@ -35,6 +36,121 @@ constexpr double kBeta = 0.04;      ///< the new step also grows with (previous 
 constexpr double kMaxShrink = 3.0;  ///< a step is at least a third of the one before
 constexpr double kMaxGrowth = 6.0;  ///< and at most six times it
 
+/// A linear combination of stages: Σ_t w[t] col[t] (the columns of the stages' matrix
+/// whose weights are not zero; most a(i, j) of these pairs' later stages are zero).
+struct Combination {
+  std::vector<const double*> col;
+  std::vector<double> w;
+  int terms() const { return static_cast<int>(w.size()); }
+};
+
+// The stepper's vector loops (the kernels below), compiled for AVX2 and for the baseline and picked at
+// load time (as the CVODES kernels, sim/fast_nvector.cpp): AVX2 without FMA does the same
+// operations in the same order, so the same bits.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define FF_RK_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define FF_RK_CLONES
+#endif
+
+#if defined(__GNUC__)
+#define FF_RK_VECTORS 1
+// V4 values pass only between always-inlined helpers, so no call's ABI depends on AVX
+// (CMakeLists.txt silences GCC's -Wpsabi note for this file)
+// four doubles as one value (GCC's vector extension: AVX2 registers in the AVX2 clone, two
+// SSE2 registers in the baseline); loads and stores through memcpy, no alignment assumed
+typedef double V4 __attribute__((vector_size(32)));
+__attribute__((always_inline)) inline V4 load(const double* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+__attribute__((always_inline)) inline void store(double* p, V4 v) { std::memcpy(p, &v, sizeof v); }
+__attribute__((always_inline)) inline V4 splat(double x) { return V4{x, x, x, x}; }
+#else
+#define FF_RK_VECTORS 0
+#endif
+
+/// out_r = [start_r +] Σ_t w_t col_t,r for r < N: each entry sums its terms in order
+/// (from start_r, or from the first term), the same bits as a loop over the terms per
+/// entry, but eight entries at a time with their sums kept in registers across the terms.
+template <bool kStart>
+__attribute__((always_inline)) inline void sum_columns(double* __restrict out, const double* __restrict start, const double* const* col,
+                        const double* w, int terms, int N) {
+  int r = 0;
+#if FF_RK_VECTORS
+  for (; r + 8 <= N; r += 8) {
+    V4 a0, a1;
+    int t = 0;
+    if (kStart) {
+      a0 = load(start + r), a1 = load(start + r + 4);
+    } else {
+      a0 = splat(w[0]) * load(col[0] + r), a1 = splat(w[0]) * load(col[0] + r + 4);
+      t = 1;
+    }
+    for (; t < terms; ++t) {
+      const V4 v = splat(w[t]);
+      a0 += v * load(col[t] + r);
+      a1 += v * load(col[t] + r + 4);
+    }
+    store(out + r, a0);
+    store(out + r + 4, a1);
+  }
+  for (; r + 4 <= N; r += 4) {
+    V4 a0;
+    int t = 0;
+    if (kStart) {
+      a0 = load(start + r);
+    } else {
+      a0 = splat(w[0]) * load(col[0] + r);
+      t = 1;
+    }
+    for (; t < terms; ++t) a0 += splat(w[t]) * load(col[t] + r);
+    store(out + r, a0);
+  }
+#endif
+  for (; r < N; ++r) {
+    double acc;
+    int t = 0;
+    if (kStart) {
+      acc = start[r];
+    } else {
+      acc = w[0] * col[0][r];
+      t = 1;
+    }
+    for (; t < terms; ++t) acc += w[t] * col[t][r];
+    out[r] = acc;
+  }
+}
+
+/// s = y + h Σ_t w_t col_t over the N entries: the sum first, as Hairer's code, so that
+/// y takes one rounding.
+FF_RK_CLONES void combine_stage(double* __restrict s, const double* __restrict y, const Combination& c, int N,
+                                double h) {
+  if (c.terms() == 0) {
+    for (int r = 0; r < N; ++r) s[r] = y[r];
+    return;
+  }
+  sum_columns<false>(s, nullptr, c.col.data(), c.w.data(), c.terms(), N);
+  for (int r = 0; r < N; ++r) s[r] = y[r] + h * s[r];
+}
+
+/// s = y + Σ_t hw_t col_t, adding term by term to y (the new solution of a pair without
+/// FSAL; hw: the weights times the step).
+FF_RK_CLONES void advance_solution(double* __restrict s, const double* __restrict y, const Combination& c,
+                                   const double* hw, int N) {
+  sum_columns<true>(s, y, c.col.data(), hw, c.terms(), N);
+}
+
+/// e = Σ_t w_t col_t over the first n entries (0 for no terms).
+FF_RK_CLONES void weigh_stages(double* __restrict e, const Combination& c, int n) {
+  if (c.terms() == 0) {
+    for (int r = 0; r < n; ++r) e[r] = 0.0;
+    return;
+  }
+  sum_columns<false>(e, nullptr, c.col.data(), c.w.data(), c.terms(), n);
+}
+
 class RungeKuttaStepper final : public detail::PieceStepper {
  public:
   RungeKuttaStepper(const OdeSystem& system, const IntegratorOptions& options, const detail::ButcherPair& tab)
@@ -45,6 +161,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     y_.setZero(N);
     y_old_.setZero(N);
     stage_.setZero(N);
+    e_sum_.setZero(n_);
     K_.setZero(N, tab_.dense_stages);
     Q_.setZero(N, tab_.dense.cols());
     if (nq_ > 0) x_quad_.setZero(n_);
@@ -52,14 +169,20 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     atol_ = change.active() && change.atol_scale.size() == n_ ? Eigen::VectorXd(options.atol * change.atol_scale)
                                                                : Eigen::VectorXd::Constant(n_, options.atol);
     // the nonzero a(i, j) of each row: most are zero in the later stages of these pairs
+    // the nonzero weights of each combination, with pointers to their columns of K_ (which
+    // is not resized after this)
+    const auto add = [this](Combination& c, int j, double v) {
+      if (v == 0.0) return;
+      c.col.push_back(K_.col(j).data());
+      c.w.push_back(v);
+    };
     rows_.resize(tab_.dense_stages);
     for (int i = 0; i < tab_.dense_stages; ++i)
-      for (int j = 0; j < i; ++j)
-        if (tab_.a[i][j] != 0.0) rows_[i].push_back({j, tab_.a[i][j]});
-    for (int i = 0; i < tab_.stages; ++i)
-      if (tab_.e[i] != 0.0) e_.push_back({i, tab_.e[i]});
-    for (int i = 0; i < static_cast<int>(tab_.e3.size()); ++i)
-      if (tab_.e3[i] != 0.0) e3_.push_back({i, tab_.e3[i]});
+      for (int j = 0; j < i; ++j) add(rows_[i], j, tab_.a[i][j]);
+    for (int i = 0; i < tab_.stages; ++i) add(e_, i, tab_.e[i]);
+    for (int i = 0; i < tab_.stages; ++i) add(b_, i, tab_.b[i]);
+    for (int i = 0; i < static_cast<int>(tab_.e3.size()); ++i) add(e3_, i, tab_.e3[i]);
+    hb_.resize(b_.w.size());
   }
 
   double* state() override { return out_.data(); }
@@ -124,11 +247,6 @@ class RungeKuttaStepper final : public detail::PieceStepper {
   const char* name() const override { return tab_.name; }
 
  private:
-  struct Weight {
-    int j;
-    double v;
-  };
-
   Outcome& failed(Outcome& out, bool with_reason = true) {
     out.ok = false;
     out.reached = t_;
@@ -171,42 +289,15 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     return false;
   }
 
-  /// stage_ = y + h Σ_j a(i, j) k_j: the sum first (as Hairer's code, so that y takes one
-  /// rounding), written as plain loops over the 18-90 entries, no library calls.
+  /// stage_ = y + h Σ_j a(i, j) k_j (combine_stage below).
   void form_stage(const Eigen::VectorXd& y, double h, int i) {
-    const int N = n_ + nq_;
-    double* __restrict s = stage_.data();
-    const double* __restrict yv = y.data();
-    const double* K = K_.data();
-    const std::vector<Weight>& row = rows_[i];
-    if (row.empty()) {
-      for (int r = 0; r < N; ++r) s[r] = yv[r];
-      return;
-    }
-    {
-      const double* __restrict k = K + static_cast<std::ptrdiff_t>(row[0].j) * N;
-      const double a = row[0].v;
-      for (int r = 0; r < N; ++r) s[r] = a * k[r];
-    }
-    for (std::size_t t = 1; t < row.size(); ++t) {
-      const double* __restrict k = K + static_cast<std::ptrdiff_t>(row[t].j) * N;
-      const double a = row[t].v;
-      for (int r = 0; r < N; ++r) s[r] += a * k[r];
-    }
-    for (int r = 0; r < N; ++r) s[r] = yv[r] + h * s[r];
+    combine_stage(stage_.data(), y.data(), rows_[i], n_ + nq_, h);
   }
 
   /// Σ_r (Σ_j w_j k_j,r / sk_r)^2 over the model's components.
-  double weighted_sum(const std::vector<Weight>& ws, const Eigen::VectorXd& y_new) const {
-    const int N = n_ + nq_;
-    // Σ_j w_j k_j,r for all r at once, stage by stage (each component sums its terms in
-    // the same order as a loop over j per component would: the same bits, vectorizable)
-    e_sum_.setZero(n_);
-    double* __restrict e = e_sum_.data();
-    for (const Weight& w : ws) {
-      const double* __restrict k = K_.data() + static_cast<std::ptrdiff_t>(w.j) * N;
-      for (int r = 0; r < n_; ++r) e[r] += w.v * k[r];
-    }
+  double weighted_sum(const Combination& ws, const Eigen::VectorXd& y_new) const {
+    weigh_stages(e_sum_.data(), ws, n_);
+    const double* e = e_sum_.data();
     double sum = 0.0;
     for (int r = 0; r < n_; ++r) {
       const double sk = atol_[r] + options_.rtol * std::max(std::abs(y_[r]), std::abs(y_new[r]));
@@ -218,7 +309,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
   /// The scaled error of the step just formed (<= 1: accepted).
   double error_norm(double h, const Eigen::VectorXd& y_new) const {
     const double e = weighted_sum(e_, y_new);
-    if (e3_.empty()) return std::abs(h) * std::sqrt(e / n_);
+    if (e3_.terms() == 0) return std::abs(h) * std::sqrt(e / n_);
     // DOP853: the fifth-order estimate, damped where the third-order one is small
     double den = e + 0.01 * weighted_sum(e3_, y_new);
     if (!(den > 0.0)) den = 1.0;
@@ -282,9 +373,8 @@ class RungeKuttaStepper final : public detail::PieceStepper {
       }
       // with FSAL the last stage was formed at y_n+1; else form it from b
       if (!tab_.fsal) {
-        stage_ = y_;
-        for (int i = 0; i < s; ++i)
-          if (tab_.b[i] != 0.0) stage_.noalias() += (h * tab_.b[i]) * K_.col(i);
+        for (int t = 0; t < b_.terms(); ++t) hb_[t] = h * b_.w[t];
+        advance_solution(stage_.data(), y_.data(), b_, hb_.data(), n_ + nq_);
       }
       const double err = error_norm(h, stage_);
       if (err <= 1.0) {
@@ -341,8 +431,9 @@ class RungeKuttaStepper final : public detail::PieceStepper {
   const IntegratorOptions& options_;
   const detail::ButcherPair& tab_;
   const int n_, nq_;
-  std::vector<std::vector<Weight>> rows_;
-  std::vector<Weight> e_, e3_;
+  std::vector<Combination> rows_;  ///< of the stages: y + h (row i) is stage i's argument
+  Combination e_, e3_, b_;         ///< the error estimates, the solution
+  std::vector<double> hb_;         ///< scratch: b_'s weights times the step
   Eigen::VectorXd atol_;
   Eigen::VectorXd out_, quad_out_;  ///< the state at the time last reached, as the driver reads it
   Eigen::VectorXd y_, y_old_, stage_, x_quad_;
