@@ -57,25 +57,31 @@ FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory
 
 FirstOrderModel::Data FirstOrderModel::create_data() const { return Data{}; }
 
-FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) const {
-  Implicit o;
+const FirstOrderModel::Implicit& FirstOrderModel::implicit_form(Data& data, const Instant& at) const {
+  // Writes into the workspace's matrices, whose sizes stay the same from call to call:
+  // after the first call nothing here allocates but the force derivative (the TV-LQR
+  // sweep evaluates this at every right-hand side; docs/benchmarks.md).
+  Implicit& o = data.implicit;
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n(), N = body_.dofs();
   const Frame fr = frame_at(nominal_, at, mi.S_o);
   const double th = fr.th, thd = fr.thd, thdd = fr.thdd;
   const Eigen::Vector2d& Rdd = fr.Rdd;
-  const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
+  data.q_zero.setZero(n);
+  const Eigen::VectorXd& q0 = data.q_zero;
 
-  Eigen::VectorXd u0(body_.elements().size());
+  Eigen::VectorXd& u0 = data.u_nominal;
+  u0.resize(static_cast<Eigen::Index>(body_.elements().size()));
   commands_(at, u0);
   const FlexibleBody::ForceDerivative force = body_.generalized_force_derivative(th, q0, u0);
   const Eigen::VectorXd& G = force.value;
   const Eigen::MatrixXd& dG = force.derivative;
 
-  o.M0 = body_.mass_matrix(th, q0);
+  body_.mass_matrix_into(th, q0, o.M0);
 
   // ∂(residual)/∂z at the nominal motion (eq. 7.1); columns Rx, Ry do not appear.
-  Eigen::MatrixXd Kr = Eigen::MatrixXd::Zero(N, N);
+  Eigen::MatrixXd& Kr = data.Kr;
+  Kr.setZero(N, N);
   Kr.block<2, 1>(0, 2) = -thdd * fr.Cs0 - thd * thd * fr.CJs0;
   Kr(2, 2) = -Rdd.dot(fr.Cs0);
   Kr.block(3, 2, n, 1) = -mi.Phi_bar.transpose() * fr.Ce1.dot(Rdd);
@@ -87,7 +93,8 @@ FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) cons
   Kr.middleCols(2, 1 + n) -= dG;  // configuration-dependent loads (eq. 14.7 included)
 
   // ∂(residual)/∂z'
-  Eigen::MatrixXd Cr = Eigen::MatrixXd::Zero(N, N);
+  Eigen::MatrixXd& Cr = data.Cr;
+  Cr.setZero(N, N);
   Cr.block<2, 1>(0, 2) = -2.0 * thd * fr.Cs0;
   Cr.block(0, 3, 2, n) = 2.0 * thd * fr.CJe2 * mi.Phi_bar;
   if (body_.damped()) Cr += body_.damping();
@@ -95,31 +102,47 @@ FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) cons
   o.Kt = -Kr;
   o.Ct = -Cr;
   o.Gu.resize(N, input_size());
-  for (int k = 0; k < input_size(); ++k) o.Gu.col(k) = body_.element_force(inputs_[k], th, q0);
+  for (int k = 0; k < input_size(); ++k) body_.element_force_into(inputs_[k], th, q0, o.Gu.col(k));
   // r0 = G - 𝕄0 z0'' - h(z0, z0'): its q rows are the forcing of the vibration; its rigid
   // rows vanish when the trajectory satisfies eq. 6.3 exactly.
-  Eigen::VectorXd zdd0 = Eigen::VectorXd::Zero(N);
+  Eigen::VectorXd& zdd0 = data.zdd0;
+  zdd0.setZero(N);
   zdd0.head<3>() = fr.acc;
-  o.r0 = G - o.M0 * zdd0;
+  data.M0zdd0.noalias() = o.M0 * zdd0;
+  o.r0 = G - data.M0zdd0;
   o.r0.head<2>() += thd * thd * fr.Cs0;
   o.theta0 = th;
   return o;
 }
 
+FirstOrderModel::Implicit FirstOrderModel::implicit_form(const Instant& at) const {
+  Data data = create_data();
+  return implicit_form(data, at);
+}
+
 const StateSpace& FirstOrderModel::state_space(Data& data, const Instant& at) const {
   const int N = body_.dofs(), m = input_size();
-  const Implicit o = implicit_form(at);
+  const Implicit& o = implicit_form(data, at);
   // 𝕄0(θ0)⁻¹ X = T 𝕄0(0)⁻¹ Tᵀ X with T = blockdiag(C(θ0), 1, I), as in rhs(): one product
   // with the inverse formed once (a factorization and its solves at every instant took a
   // sixth of a TV-LQR sweep's instructions at NOA 6; docs/benchmarks.md)
   Eigen::MatrixXd& X = data.X;
   X.resize(N, 2 * N + m + 1);
-  X << o.Kt, o.Ct, o.Gu, o.r0;
+  X.leftCols(N) = o.Kt;
+  X.middleCols(N, N) = o.Ct;
+  X.middleCols(2 * N, m) = o.Gu;
+  X.col(2 * N + m) = o.r0;
   const Eigen::Matrix2d C = rot(o.theta0);
-  X.topRows<2>() = (C.transpose() * X.topRows<2>()).eval();
+  for (Eigen::Index j = 0; j < X.cols(); ++j) {
+    const Eigen::Vector2d v = C.transpose() * X.col(j).head<2>();
+    X.col(j).head<2>() = v;
+  }
   Eigen::MatrixXd& Y = data.Y;
   Y.noalias() = rest_inverse_ * X;
-  Y.topRows<2>() = (C * Y.topRows<2>()).eval();
+  for (Eigen::Index j = 0; j < Y.cols(); ++j) {
+    const Eigen::Vector2d v = C * Y.col(j).head<2>();
+    Y.col(j).head<2>() = v;
+  }
   Eigen::MatrixXd& A = data.state_space.A;
   Eigen::MatrixXd& B = data.state_space.B;
   Eigen::VectorXd& g = data.state_space.g;

@@ -93,6 +93,13 @@ int FlexibleBody::element_index(const std::string& name) const {
 }
 
 Eigen::MatrixXd FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const {
+  Eigen::MatrixXd out;
+  mass_matrix_into(theta, q, out);
+  return out;
+}
+
+void FlexibleBody::mass_matrix_into(double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                    Eigen::MatrixXd& out) const {
   const int n = this->n();
   const Eigen::Matrix2d C = rot(theta);
   if (stiffening_) {
@@ -102,7 +109,7 @@ Eigen::MatrixXd FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const E
     Eigen::MatrixXd B(2, n);
     B.row(0) = -Hq.transpose();
     B.row(1) = mi_.Phi_bar;
-    Eigen::MatrixXd out = Eigen::MatrixXd::Zero(dofs(), dofs());
+    out.setZero(dofs(), dofs());
     out(0, 0) = out(1, 1) = mi_.m;
     out.block<2, 1>(0, 2) = C * kJ * s;
     out.block<1, 2>(2, 0) = (C * kJ * s).transpose();
@@ -112,10 +119,10 @@ Eigen::MatrixXd FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const E
     out.block(2, 3, 1, n) = mi_.Phi_tilde;
     out.block(3, 2, n, 1) = mi_.Phi_tilde.transpose();
     out.bottomRightCorner(n, n) = mi_.M;
-    return out;
+    return;
   }
   const Eigen::Vector2d s(mi_.S_o, mi_.Phi_bar.dot(q));  // s(q) = ∫p dm, eq. 3.3
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(dofs(), dofs());
+  out.setZero(dofs(), dofs());
   out(0, 0) = out(1, 1) = mi_.m;
   const Eigen::Vector2d MRth = C * kJ * s;                 // C J s
   const Eigen::Vector2d Ce2 = C.col(1);                    // C e2
@@ -129,14 +136,13 @@ Eigen::MatrixXd FlexibleBody::mass_matrix(double theta, const Eigen::Ref<const E
   out.block(2, 3, 1, n) = mi_.Phi_tilde;
   out.block(3, 2, n, 1) = mi_.Phi_tilde.transpose();
   out.bottomRightCorner(n, n) = mi_.M;
-  return out;
 }
 
 namespace {
 
 /// Generalized force of element e per unit command at (theta, q) into g and, if d is
 /// given, its derivative with respect to (theta, q) into d (eq. 6.4).
-void element_force_into(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+void element_force_kernel(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
                         Eigen::Ref<Eigen::VectorXd> g, Eigen::MatrixXd* d) {
   const int n = body.n();
   const ForceElement& el = body.elements()[e];
@@ -154,7 +160,6 @@ void element_force_into(const FlexibleBody& body, int e, double theta, const Eig
   const bool follows = el.type == ForceElement::Type::Thruster && el.follow_slope;
   Eigen::Vector2d f, df_dth;
   applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df_dth);
-  const Eigen::MatrixXd df_dq = follows ? Eigen::MatrixXd(df_dth * dphi) : Eigen::MatrixXd::Zero(2, n);
   // Body components w = Cᵀ f; then M_o = wᵀ J p = -w_x u_a + w_y x_a, Q = Φ_aᵀ w_y.
   const Eigen::Matrix2d C = rot(theta);
   const double xa = body.element_x(e), ua = phi.dot(q);
@@ -173,6 +178,7 @@ void element_force_into(const FlexibleBody& body, int e, double theta, const Eig
     g.tail(n) -= (sa * w(0)) * Haq;
   }
   if (!d) return;
+  const Eigen::MatrixXd df_dq = follows ? Eigen::MatrixXd(df_dth * dphi) : Eigen::MatrixXd::Zero(2, n);
   const Eigen::Vector2d dw_dth = kJ.transpose() * w + C.transpose() * df_dth;
   const Eigen::MatrixXd dw_dq = C.transpose() * df_dq;
   d->block<2, 1>(0, 0) = df_dth;
@@ -194,15 +200,20 @@ void element_force_into(const FlexibleBody& body, int e, double theta, const Eig
 
 Eigen::VectorXd FlexibleBody::element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const {
   Eigen::VectorXd g(dofs());
-  element_force_into(*this, e, theta, q, g, nullptr);
+  element_force_into(e, theta, q, g);
   return g;
+}
+
+void FlexibleBody::element_force_into(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                      Eigen::Ref<Eigen::VectorXd> out) const {
+  element_force_kernel(*this, e, theta, q, out, nullptr);
 }
 
 FlexibleBody::ForceDerivative FlexibleBody::element_force_derivative(int e, double theta,
                                                                      const Eigen::Ref<const Eigen::VectorXd>& q) const {
   ForceDerivative r;
   r.value.resize(dofs());
-  element_force_into(*this, e, theta, q, r.value, &r.derivative);
+  element_force_kernel(*this, e, theta, q, r.value, &r.derivative);
   return r;
 }
 
@@ -223,7 +234,7 @@ FlexibleBody::ForceDerivative FlexibleBody::generalized_force_derivative(
   Eigen::MatrixXd dg;
   for (int e = 0; e < static_cast<int>(elements_.size()); ++e) {
     if (commands(e) == 0.0) continue;
-    element_force_into(*this, e, theta, q, g, &dg);
+    element_force_kernel(*this, e, theta, q, g, &dg);
     r.value += commands(e) * g;
     r.derivative += commands(e) * dg;
   }

@@ -87,6 +87,53 @@ TEST_CASE("first-order A(t), B(t) match central differences of the full model", 
   }
 }
 
+namespace {
+/// A rigid motion that differs from instant to instant (the state is a smooth function of t).
+class WavyTrajectory : public freeflex::RigidTrajectory {
+ public:
+  freeflex::RigidState at(const freeflex::Instant& w) const override {
+    const double t = w.t;
+    freeflex::RigidState s;
+    s.pos << 0.3 * std::sin(t), -0.2 * t, 1.5 * std::sin(2.0 * t);
+    s.vel << 0.3 * std::cos(t), -0.2, 3.0 * std::cos(2.0 * t);
+    s.acc << -0.3 * std::sin(t), 0.0, -6.0 * std::sin(2.0 * t);
+    return s;
+  }
+  double t_begin() const override { return 0.0; }
+  double t_end() const override { return 10.0; }
+  std::vector<double> breakpoints() const override { return {}; }
+};
+}  // namespace
+
+TEST_CASE("first-order model: a reused workspace gives the bits of a fresh one", "[dynamics]") {
+  // state_space() and implicit_form() write into the workspace's matrices from call to
+  // call; nothing of an earlier instant may remain (exact equality: the same operations)
+  const bool stiffening = GENERATE(false, true);
+  const FlexibleBody body = rich_body(6, {0.02, 0.01, 0.03}, stiffening);
+  const WavyTrajectory traj;
+  const FirstOrderModel fo(body, traj,
+                           [](const Instant& at, Eigen::Ref<Eigen::VectorXd> u) {
+                             for (Eigen::Index e = 0; e < u.size(); ++e) u(e) = std::cos(at.t + e);
+                           },
+                           {0, 2});
+  FirstOrderModel::Data reused = fo.create_data();
+  for (int k = 0; k < 6; ++k) {
+    const Instant at = Instant::at(0.7 * k);
+    const StateSpace& a = fo.state_space(reused, at);
+    const StateSpace b = fo.state_space(at);
+    CHECK(a.A == b.A);
+    CHECK(a.B == b.B);
+    CHECK(a.g == b.g);
+    const FirstOrderModel::Implicit fresh = fo.implicit_form(at);
+    const FirstOrderModel::Implicit& again = fo.implicit_form(reused, at);
+    CHECK(again.Kt == fresh.Kt);
+    CHECK(again.Ct == fresh.Ct);
+    CHECK(again.Gu == fresh.Gu);
+    CHECK(again.r0 == fresh.r0);
+    CHECK(again.M0 == fresh.M0);
+  }
+}
+
 TEST_CASE("element forces: derivatives against central differences away from q = 0", "[dynamics]") {
   const bool stiffening = GENERATE(false, true);
   INFO("geometric stiffening " << stiffening);

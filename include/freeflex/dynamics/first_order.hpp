@@ -44,6 +44,9 @@ class FirstOrderModel {
     Eigen::VectorXd q, q0, u0, f, dG, x1;  // scratch of rhs()
     Eigen::Matrix2d C;
     Eigen::MatrixXd X, Y;  // scratch of state_space()
+    Implicit implicit;     ///< from the last implicit_form(data, at) (state_space() fills it)
+    Eigen::MatrixXd Kr, Cr;  // scratch of implicit_form()
+    Eigen::VectorXd zdd0, M0zdd0, u_nominal, q_zero;
   };
 
   /// `inputs` are the element indices whose commands u1 perturb (the actuators); the
@@ -59,6 +62,10 @@ class FirstOrderModel {
 
   Data create_data() const;
 
+  /// The implicit form at one instant, into data.implicit (no allocation after the first
+  /// call with a workspace).
+  const Implicit& implicit_form(Data& data, const Instant& at) const;
+  /// The same, returned (allocates a workspace: for one-off use).
   Implicit implicit_form(const Instant& at) const;
   /// A(t), B(t), g(t) of eq. 7.3, into data.state_space.
   const StateSpace& state_space(Data& data, const Instant& at) const;

@@ -48,6 +48,8 @@ class FlexibleBody {
 
   /// 𝕄(theta, q), eq. 6.1 (eq. 14.5 with geometric stiffening), (3+n) x (3+n).
   Eigen::MatrixXd mass_matrix(double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
+  /// The same into out (resized; no allocation when it has the size already).
+  void mass_matrix_into(double theta, const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::MatrixXd& out) const;
 
   /// A generalized force and its derivative with respect to (theta, q).
   struct ForceDerivative {
@@ -56,6 +58,9 @@ class FlexibleBody {
   };
   /// Generalized force [F; M_o; Q] of element e per unit command at (theta, q), eq. 6.4.
   Eigen::VectorXd element_force(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
+  /// The same into out (3+n entries).
+  void element_force_into(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                          Eigen::Ref<Eigen::VectorXd> out) const;
   /// The same with its derivative with respect to (theta, q).
   ForceDerivative element_force_derivative(int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q) const;
   /// Sum over elements of commands(e) times element_force.
