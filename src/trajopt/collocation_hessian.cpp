@@ -7,6 +7,32 @@
 #include <string>
 
 namespace freeflex {
+namespace {
+
+/// The lower triangle of B = Lᵀ R (L, R: k x q). For k <= 4 (the rigid problems) each entry
+/// is a dot product of two columns summed in order from zero, the roundings of Eigen's
+/// product without its set-up, which costs more than the arithmetic there (the rigid slew's
+/// whole run 0.8% fewer instructions); for the elastic problems' larger k Eigen's blocked
+/// product is faster (2.3% of the elastic slew).
+void lower_product(const Eigen::MatrixXd& L, const Eigen::MatrixXd& R, Eigen::MatrixXd& B) {
+  const Eigen::Index k = L.rows(), q = L.cols();
+  if (k > 4) {
+    B.triangularView<Eigen::Lower>() = L.transpose() * R;
+    return;
+  }
+  for (Eigen::Index j = 0; j < q; ++j) {
+    const double* r = R.col(j).data();
+    for (Eigen::Index i = j; i < q; ++i) {
+      const double* l = L.col(i).data();
+      double acc = 0.0;
+      for (Eigen::Index t = 0; t < k; ++t) acc += l[t] * r[t];
+      B(i, j) = acc;
+    }
+  }
+}
+
+}  // namespace
+
 
 const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::Ref<const Eigen::VectorXd>& w,
                                                       double obj_factor,
@@ -88,7 +114,7 @@ const Eigen::VectorXd& CollocationNlp::hessian_values(Data& data, const Eigen::R
     c.R.bottomRows(ns) = c.L.topRows(ns);
     // B is symmetric and only its lower triangle is read (dense_act_ ascends; the T row is last)
     B_.resize(q, q);
-    B_.triangularView<Eigen::Lower>() = c.L.transpose() * c.R;
+    lower_product(c.L, c.R, B_);
     if (free_time()) {
       const int iT = q - 1;
       // s' ∂g/∂v with ∂g/∂v = λᵀ J_c Y; ∂²x_c/∂T∂z_a = σ/8 J_a, ∂²x_c/∂T∂z_b = −σ/8 J_b
