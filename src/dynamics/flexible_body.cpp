@@ -19,13 +19,15 @@ const Eigen::Matrix2d& kJ = planar::J();
 /// Inertial force per unit command (eq. 6.4a, 6.4b) and its derivative with respect to
 /// the angle psi = θ (+ Φ'(x_a) q when following the slope) that turns it; a force with
 /// inertial components does not turn (derivative zero).
-void applied_force(const ForceElement& el, double psi, Eigen::Vector2d& f, Eigen::Vector2d& df_dpsi) {
+/// `C_psi`: rot(psi) when the caller has it already (one sine and cosine fewer).
+void applied_force(const ForceElement& el, double psi, Eigen::Vector2d& f, Eigen::Vector2d& df_dpsi,
+                   const Eigen::Matrix2d* C_psi = nullptr) {
   if (el.type == ForceElement::Type::Force) {
     f = el.direction;
     df_dpsi.setZero();
     return;
   }
-  const Eigen::Matrix2d Cp = rot(psi);
+  const Eigen::Matrix2d Cp = C_psi ? *C_psi : rot(psi);
   f = Cp * el.direction;
   df_dpsi = Cp * kJ * el.direction;
 }
@@ -159,9 +161,9 @@ void element_force_kernel(const FlexibleBody& body, int e, double theta, const E
   // Inertial force f(theta, q) and its derivatives (eq. 6.4a, 6.4b).
   const bool follows = el.type == ForceElement::Type::Thruster && el.follow_slope;
   Eigen::Vector2d f, df_dth;
-  applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df_dth);
+  const Eigen::Matrix2d C = rot(theta);  // a thruster that does not follow the slope points at θ
+  applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df_dth, follows ? nullptr : &C);
   // Body components w = Cᵀ f; then M_o = wᵀ J p = -w_x u_a + w_y x_a, Q = Φ_aᵀ w_y.
-  const Eigen::Matrix2d C = rot(theta);
   const double xa = body.element_x(e), ua = phi.dot(q);
   const Eigen::Vector2d w = C.transpose() * f;
   g.head<2>() = f;
@@ -263,9 +265,9 @@ void detail::add_element_force(const FlexibleBody& body, int e, double theta, co
   // Same steps as element_force, along one direction (d_theta, d_q) instead of a Jacobian.
   const bool follows = el.type == ForceElement::Type::Thruster && el.follow_slope;
   Eigen::Vector2d f, df;
-  applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df);
+  const Eigen::Matrix2d C = rot(theta);  // a thruster that does not follow the slope points at θ
+  applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df, follows ? nullptr : &C);
   df *= d_theta + (follows && d_q ? dphi.dot(*d_q) : 0.0);
-  const Eigen::Matrix2d C = rot(theta);
   const double xa = body.element_x(e), ua = phi.dot(q);
   const Eigen::Vector2d w = C.transpose() * f;
   G.head<2>() += scale * f;
