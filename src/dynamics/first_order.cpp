@@ -58,9 +58,10 @@ FirstOrderModel::FirstOrderModel(const FlexibleBody& body, const RigidTrajectory
 FirstOrderModel::Data FirstOrderModel::create_data() const { return Data{}; }
 
 const FirstOrderModel::Implicit& FirstOrderModel::implicit_form(Data& data, const Instant& at) const {
-  // Writes into the workspace's matrices, whose sizes stay the same from call to call:
-  // after the first call nothing here allocates but the force derivative (the TV-LQR
-  // sweep evaluates this at every right-hand side; docs/benchmarks.md).
+  // Writes into the workspace's matrices, whose sizes stay the same from call to call (the
+  // TV-LQR sweep evaluates this at every right-hand side; docs/benchmarks.md): after the
+  // first call only the force derivative allocates (and, with geometric stiffening, the
+  // mass matrix's scratch).
   Implicit& o = data.implicit;
   const ModalIntegrals& mi = body_.integrals();
   const int n = body_.n(), N = body_.dofs();
@@ -85,7 +86,7 @@ const FirstOrderModel::Implicit& FirstOrderModel::implicit_form(Data& data, cons
   Kr.block<2, 1>(0, 2) = -thdd * fr.Cs0 - thd * thd * fr.CJs0;
   Kr(2, 2) = -Rdd.dot(fr.Cs0);
   Kr.block(3, 2, n, 1) = -mi.Phi_bar.transpose() * fr.Ce1.dot(Rdd);
-  Kr.block(0, 3, 2, n) = (thdd * fr.CJe2 - thd * thd * fr.Ce2) * mi.Phi_bar;
+  Kr.block(0, 3, 2, n).noalias() = (thdd * fr.CJe2 - thd * thd * fr.Ce2) * mi.Phi_bar;
   Kr.block(2, 3, 1, n) = Rdd.dot(fr.CJe2) * mi.Phi_bar;
   Kr.bottomRightCorner(n, n) = mi.K - thd * thd * mi.M;
   if (body_.geometric_stiffening())  // eq. 14.9: the tension the nominal motion sets up
@@ -96,7 +97,7 @@ const FirstOrderModel::Implicit& FirstOrderModel::implicit_form(Data& data, cons
   Eigen::MatrixXd& Cr = data.Cr;
   Cr.setZero(N, N);
   Cr.block<2, 1>(0, 2) = -2.0 * thd * fr.Cs0;
-  Cr.block(0, 3, 2, n) = 2.0 * thd * fr.CJe2 * mi.Phi_bar;
+  Cr.block(0, 3, 2, n).noalias() = 2.0 * thd * fr.CJe2 * mi.Phi_bar;
   if (body_.damped()) Cr += body_.damping();
 
   o.Kt = -Kr;

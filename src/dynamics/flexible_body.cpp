@@ -130,8 +130,8 @@ void FlexibleBody::mass_matrix_into(double theta, const Eigen::Ref<const Eigen::
   const Eigen::Vector2d Ce2 = C.col(1);                    // C e2
   out.block<2, 1>(0, 2) = MRth;
   out.block<1, 2>(2, 0) = MRth.transpose();
-  out.block(0, 3, 2, n) = Ce2 * mi_.Phi_bar;
-  out.block(3, 0, n, 2) = (Ce2 * mi_.Phi_bar).transpose();
+  out.block(0, 3, 2, n).noalias() = Ce2 * mi_.Phi_bar;
+  out.block(3, 0, n, 2) = out.block(0, 3, 2, n).transpose();
   double qMq = 0.0;  // qᵀ M q without a temporary: this runs in every right-hand side
   for (int i = 0; i < n; ++i) qMq += q(i) * mi_.M.col(i).dot(q);
   out(2, 2) = mi_.I_o + qMq;
@@ -161,7 +161,9 @@ void element_force_kernel(const FlexibleBody& body, int e, double theta, const E
   // Inertial force f(theta, q) and its derivatives (eq. 6.4a, 6.4b).
   const bool follows = el.type == ForceElement::Type::Thruster && el.follow_slope;
   Eigen::Vector2d f, df_dth;
-  const Eigen::Matrix2d C = rot(theta);  // a thruster that does not follow the slope points at θ
+  // a thruster that does not follow the slope points at θ: its rotation is C (at θ = −0.0
+  // the sign of a zero force component may differ from rot(θ + 0.0); nothing else)
+  const Eigen::Matrix2d C = rot(theta);
   applied_force(el, theta + (follows ? dphi.dot(q) : 0.0), f, df_dth, follows ? nullptr : &C);
   // Body components w = Cᵀ f; then M_o = wᵀ J p = -w_x u_a + w_y x_a, Q = Φ_aᵀ w_y.
   const double xa = body.element_x(e), ua = phi.dot(q);

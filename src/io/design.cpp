@@ -130,7 +130,7 @@ Design load_design(const std::string& path) {
   // grown since it was measured). Not into a buffer of the limit's size: zeroing 1 MiB cost
   // a thousand page faults' worth of time, 5% of a small design's whole run.
   std::string text;
-  if (!ec) text.reserve(static_cast<std::size_t>(size) + 1);
+  if (!ec) text.reserve(static_cast<std::size_t>(size));
   char piece[16384];
   do {
     in.read(piece, sizeof piece);

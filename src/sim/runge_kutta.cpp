@@ -44,9 +44,10 @@ struct Combination {
   int terms() const { return static_cast<int>(w.size()); }
 };
 
-// The stepper's vector loops (the kernels below), compiled for AVX2 and for the baseline and picked at
-// load time (as the CVODES kernels, sim/fast_nvector.cpp): AVX2 without FMA does the same
-// operations in the same order, so the same bits.
+// The stepper's vector loops (the kernels below), compiled for AVX2 and for the baseline
+// and picked at load time (as the CVODES kernels, sim/fast_nvector.cpp): AVX2 without FMA
+// does the same operations in the same order, so the same bits (CMakeLists.txt compiles
+// this file with -ffp-contract=off for every compiler: no multiply-add is fused).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define FF_RK_CLONES __attribute__((target_clones("avx2", "default")))
 #else
@@ -54,20 +55,22 @@ struct Combination {
 #endif
 
 #if defined(__GNUC__)
+#define FF_RK_INLINE __attribute__((always_inline)) inline
 #define FF_RK_VECTORS 1
 // V4 values pass only between always-inlined helpers, so no call's ABI depends on AVX
 // (CMakeLists.txt silences GCC's -Wpsabi note for this file)
 // four doubles as one value (GCC's vector extension: AVX2 registers in the AVX2 clone, two
 // SSE2 registers in the baseline); loads and stores through memcpy, no alignment assumed
 typedef double V4 __attribute__((vector_size(32)));
-__attribute__((always_inline)) inline V4 load(const double* p) {
+FF_RK_INLINE V4 load(const double* p) {
   V4 v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-__attribute__((always_inline)) inline void store(double* p, V4 v) { std::memcpy(p, &v, sizeof v); }
-__attribute__((always_inline)) inline V4 splat(double x) { return V4{x, x, x, x}; }
+FF_RK_INLINE void store(double* p, V4 v) { std::memcpy(p, &v, sizeof v); }
+FF_RK_INLINE V4 splat(double x) { return V4{x, x, x, x}; }
 #else
+#define FF_RK_INLINE inline
 #define FF_RK_VECTORS 0
 #endif
 
@@ -75,7 +78,7 @@ __attribute__((always_inline)) inline V4 splat(double x) { return V4{x, x, x, x}
 /// (from start_r, or from the first term), the same bits as a loop over the terms per
 /// entry, but eight entries at a time with their sums kept in registers across the terms.
 template <bool kStart>
-__attribute__((always_inline)) inline void sum_columns(double* __restrict out, const double* __restrict start, const double* const* col,
+FF_RK_INLINE void sum_columns(double* __restrict out, const double* __restrict start, const double* const* col,
                         const double* w, int terms, int N) {
   int r = 0;
 #if FF_RK_VECTORS
@@ -168,9 +171,8 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     const VariableChange& change = system.variables;
     atol_ = change.active() && change.atol_scale.size() == n_ ? Eigen::VectorXd(options.atol * change.atol_scale)
                                                                : Eigen::VectorXd::Constant(n_, options.atol);
-    // the nonzero a(i, j) of each row: most are zero in the later stages of these pairs
     // the nonzero weights of each combination, with pointers to their columns of K_ (which
-    // is not resized after this)
+    // is not resized after this, and the stepper is neither copied nor moved)
     const auto add = [this](Combination& c, int j, double v) {
       if (v == 0.0) return;
       c.col.push_back(K_.col(j).data());
@@ -184,6 +186,8 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     for (int i = 0; i < static_cast<int>(tab_.e3.size()); ++i) add(e3_, i, tab_.e3[i]);
     hb_.resize(b_.w.size());
   }
+  RungeKuttaStepper(const RungeKuttaStepper&) = delete;  // the combinations point into K_
+  RungeKuttaStepper& operator=(const RungeKuttaStepper&) = delete;
 
   double* state() override { return out_.data(); }
   const double* quadrature() override { return quad_out_.data(); }

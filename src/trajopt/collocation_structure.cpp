@@ -25,6 +25,7 @@ class SlotTable {
   }
   /// The slot stored for key, or -1.
   int find(long long key) const { return values_at(probe(key)); }
+  /// Stores key -> value; key must not be in the table yet (find() first).
   void insert(long long key, int value) {
     if (2 * (count_ + 1) > keys_.size()) grow();
     const std::size_t i = probe(key);
@@ -298,7 +299,7 @@ void CollocationNlp::build_hessian_structure() {
   const int Tidx = time_index();
   const int npi = points_per_interval();
   const auto& fpat = dyn_.jacobian_pattern();
-  SlotTable slots(static_cast<std::size_t>(P_) * dyn_.hessian_pattern().size() * 2 + 1024);  // an elastic NLP: ~1e5
+  SlotTable slots(static_cast<std::size_t>(P_) * dyn_.hessian_pattern().size() + 1024);  // an elastic NLP: ~1e5
   hess_rows_.clear();
   hess_cols_.clear();
   auto slot = [&](int r, int c) {

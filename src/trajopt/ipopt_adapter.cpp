@@ -273,8 +273,9 @@ NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, c
   // registry is not shared between threads).
   thread_local Ipopt::SmartPtr<Ipopt::RegisteredOptions> registered;
   if (Ipopt::IsNull(registered)) {
-    registered = new Ipopt::RegisteredOptions();
-    Ipopt::IpoptApplication::RegisterAllIpoptOptions(registered);
+    Ipopt::SmartPtr<Ipopt::RegisteredOptions> fresh = new Ipopt::RegisteredOptions();
+    Ipopt::IpoptApplication::RegisterAllIpoptOptions(fresh);  // kept only once complete
+    registered = fresh;
   }
   Ipopt::SmartPtr<Ipopt::Journalist> journalist = new Ipopt::Journalist();
   if (o.verbose) {

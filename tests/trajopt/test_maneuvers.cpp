@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <thread>
 
 #include "freeflex/dynamics/zero_order.hpp"
 #include "freeflex/trajopt/replay.hpp"
@@ -71,6 +72,30 @@ TEST_CASE("minimum-energy rotation: Hermite-Simpson is exact at any N", "[trajop
       const double tau = I_o * dth * (6.0 - 12.0 * t / T) / (T * T);  // θ'' I_o of the cubic
       CHECK(std::abs(r.control_at(t)(0) - tau) < 1e-6);  // control error ~ multiplier accuracy
     }
+  }
+}
+
+TEST_CASE("solves on one thread and on two at once agree to the bit", "[trajopt]") {
+  // Each thread keeps one registry of Ipopt's options for all its solves
+  // (trajopt/ipopt_adapter.cpp): the second solve on a thread, and solves on two threads
+  // at once, must give what the first solve gave.
+  const FlexibleBody body = torque_body();
+  TrajoptOptions o;
+  o.intervals = 8;
+  const ManeuverProblem p = rotation(1.2, 2.0);
+  const TrajoptResult first = solve_maneuver(body, p, o);
+  REQUIRE(first.ok());
+  const TrajoptResult again = solve_maneuver(body, p, o);
+  TrajoptResult a, b;
+  std::thread ta([&] { a = solve_maneuver(body, p, o); });
+  std::thread tb([&] { b = solve_maneuver(body, p, o); });
+  ta.join();
+  tb.join();
+  for (const TrajoptResult* r : std::initializer_list<const TrajoptResult*>{&again, &a, &b}) {
+    REQUIRE(r->ok());
+    CHECK(r->iterations == first.iterations);
+    CHECK(r->objective == first.objective);
+    CHECK(r->u == first.u);
   }
 }
 

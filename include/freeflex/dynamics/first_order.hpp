@@ -62,8 +62,8 @@ class FirstOrderModel {
 
   Data create_data() const;
 
-  /// The implicit form at one instant, into data.implicit (no allocation after the first
-  /// call with a workspace).
+  /// The implicit form at one instant, into data.implicit (its matrices reused from call
+  /// to call; only the force derivative allocates).
   const Implicit& implicit_form(Data& data, const Instant& at) const;
   /// The same, returned (allocates a workspace: for one-off use).
   Implicit implicit_form(const Instant& at) const;
