@@ -12,10 +12,14 @@
 // they do not (docs/benchmarks.md, "a Magnus probe").
 //
 //   build/bench/magnus_probe [NOA] [steps per piece...]   (default: 20; 20 40 ... 1280)
+//   build/bench/magnus_probe --export NOA DIR   the same coordinates' Ã(t) sampled on 0-1 s
+//       and references, for the Python Filon probe of scripts/filon_probe (its README)
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -26,6 +30,18 @@
 
 using namespace freeflex;
 
+namespace {
+
+/// A matrix as raw row-major doubles (numpy.fromfile(...).reshape(rows, cols)).
+bool write_matrix(const std::string& path, const Eigen::MatrixXd& M) {
+  const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> R = M;
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(R.data()), static_cast<std::streamsize>(sizeof(double) * R.size()));
+  return static_cast<bool>(out);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   // whole numbers only: "6abc" is refused, not read as 6
   auto whole = [](const char* a) {
@@ -33,9 +49,15 @@ int main(int argc, char** argv) {
     const long v = std::strtol(a, &end, 10);
     return end != a && *end == '\0' && v > 0 && v < 1000000 ? static_cast<int>(v) : -1;
   };
-  const int noa = argc > 1 ? whole(argv[1]) : 20;
+  const bool export_mode = argc > 1 && std::string(argv[1]) == "--export";
+  if (export_mode && argc != 4) {
+    std::fprintf(stderr, "magnus_probe: --export NOA DIR\n");
+    return 2;
+  }
+  const int first_arg = export_mode ? 2 : 1;
+  const int noa = argc > first_arg ? whole(argv[first_arg]) : 20;
   std::vector<int> counts;
-  for (int i = 2; i < argc; ++i) counts.push_back(whole(argv[i]));
+  for (int i = first_arg + 1; i < argc && !export_mode; ++i) counts.push_back(whole(argv[i]));
   if (counts.empty()) counts = {20, 40, 80, 160, 320, 640, 1280};
   if (noa < 1 || noa > 60) {
     std::fprintf(stderr, "magnus_probe: NOA must be 1..60\n");
@@ -104,6 +126,63 @@ int main(int argc, char** argv) {
     rotation(st.pos(2), st.vel(2), Rot, Rdot);
     M = S_inv * (Rot.transpose() * M * Rot - Rdot) * S;
   };
+
+  if (export_mode) {
+    // DIR/meta.txt: N, 2N, ω of each mode; S.bin, Sinv.bin ((2N+1) x (2N+1)): x = S y;
+    // samples_p{0,1}.bin: 501 rows per piece of the loads, t, θ0, θ0', θ0'', command, then
+    // Ã(t) row-major in y; ref_{13,14}.bin: the perturbation solution at rtol 1e-13 and
+    // 1e-14 every 5 ms on 0-1 s, rows t, total z, total z', zero-order z, zero-order z'.
+    const std::string dir = argv[3];
+    bool ok = write_matrix(dir + "/S.bin", S) && write_matrix(dir + "/Sinv.bin", S_inv);
+    std::ofstream meta(dir + "/meta.txt");
+    meta.precision(17);
+    meta << N << ' ' << n;
+    for (int i = 0; i < ne; ++i) meta << ' ' << omega(i);
+    meta << '\n';
+    ok = ok && static_cast<bool>(meta);
+    const int K = 501;
+    Eigen::MatrixXd M;
+    for (int p = 0; p < 2 && ok; ++p) {
+      const double a = 0.5 * p, b = a + 0.5, mid = 0.5 * (a + b);
+      Eigen::MatrixXd rows(K, 5 + (n + 1) * (n + 1));
+      for (int k = 0; k < K; ++k) {
+        const double t = a + (b - a) * k / (K - 1);
+        augmented(t, mid, M);
+        const RigidState st = nominal.at(Instant{t, mid});
+        rows(k, 0) = t;
+        rows(k, 1) = st.pos(2);
+        rows(k, 2) = st.vel(2);
+        rows(k, 3) = st.acc(2);
+        rows(k, 4) = ex.commands(Instant{t, mid})(0);
+        const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Mr = M;
+        rows.row(k).tail(Mr.size()) = Eigen::Map<const Eigen::RowVectorXd>(Mr.data(), Mr.size());
+      }
+      ok = write_matrix(dir + "/samples_p" + std::to_string(p) + ".bin", rows);
+    }
+    for (int k : {13, 14}) {
+      if (!ok) break;
+      SimulationOptions r = o;
+      r.duration_s = 1.0;
+      r.output_step_s = 0.005;
+      r.integrator.rtol = std::pow(10.0, -k);
+      r.integrator.atol = 1e-2 * r.integrator.rtol;
+      const PerturbationResult sol = simulate_perturbation(body, ex, r);
+      if (!sol.total.ok()) {
+        std::fprintf(stderr, "magnus_probe: the reference at rtol 1e-%d failed: %s\n", k, sol.total.message.c_str());
+        return 1;
+      }
+      const Eigen::Index T = sol.total.t.size();
+      Eigen::MatrixXd R(T, 1 + 4 * N);
+      R << sol.total.t, sol.total.z, sol.total.z_dot, sol.zero_order.z, sol.zero_order.z_dot;
+      ok = write_matrix(dir + "/ref_" + std::to_string(k) + ".bin", R);
+    }
+    if (!ok) {
+      std::fprintf(stderr, "magnus_probe: cannot write into %s (does it exist?)\n", dir.c_str());
+      return 3;
+    }
+    std::printf("NOA %d: exported to %s (omega_max %.1f rad/s)\n", noa, dir.c_str(), omega.maxCoeff());
+    return 0;
+  }
 
   std::printf("NOA %d, omega_max %.0f rad/s; errors against the perturbation solution at rtol 1e-13\n\n", noa,
               omega.maxCoeff());
