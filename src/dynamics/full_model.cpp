@@ -96,7 +96,7 @@ namespace {
 /// CMakeLists.txt) and no -march: a fixed NN only lets the compiler unroll and vectorize
 /// the loops over entries (no reductions are reordered; the dot products stay sequential).
 template <int NN>
-bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
+__attribute__((always_inline)) inline bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
                      const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
                      int n_runtime) {
   const ModalIntegrals& mi = body.integrals();
@@ -179,6 +179,26 @@ bool detail::full_rhs_runtime_size(const FullModel& model, FullModel::Data& d, c
   return full_rhs_kernel<0>(model.body(), model.rest_inverse(), d, x, commands, model.body().n());
 }
 
+namespace {
+// The kernels of NOA 20 and of the run-time size compiled twice, for AVX2 and for the
+// baseline, and picked at load time (as the CVODES kernels, sim/fast_nvector.cpp; AVX2
+// without FMA and this file's -ffp-contract=off: the same bits). At NOA 20 the right-hand
+// side is bound by its arithmetic and runs 10-13% faster so (docs/benchmarks.md); at the
+// small sizes the chain of dependent operations binds it and AVX2 did not pay (NOA 6:
+// 2-3% slower), so those kernels stay as they are.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define FF_RHS_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define FF_RHS_CLONES
+#endif
+FF_RHS_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
+                             const Eigen::Ref<const Eigen::VectorXd>& x,
+                             const Eigen::Ref<const Eigen::VectorXd>& commands) {
+  if (body.n() == 20) return full_rhs_kernel<20>(body, rest_inverse, d, x, commands, 20);
+  return full_rhs_kernel<0>(body, rest_inverse, d, x, commands, body.n());
+}
+}  // namespace
+
 bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                     const Eigen::Ref<const Eigen::VectorXd>& commands) const {
   if (body_.geometric_stiffening()) return rhs_stiffened(d, x, commands);
@@ -192,8 +212,7 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
     case 6: return full_rhs_kernel<6>(body_, rest_inverse_, d, x, commands, 6);
     case 8: return full_rhs_kernel<8>(body_, rest_inverse_, d, x, commands, 8);
     case 10: return full_rhs_kernel<10>(body_, rest_inverse_, d, x, commands, 10);
-    case 20: return full_rhs_kernel<20>(body_, rest_inverse_, d, x, commands, 20);
-    default: return full_rhs_kernel<0>(body_, rest_inverse_, d, x, commands, body_.n());
+    default: return large_rhs(body_, rest_inverse_, d, x, commands);
   }
 }
 
