@@ -7,9 +7,11 @@
 #include <random>
 #include <set>
 #include <tuple>
+#include <unordered_map>
 
 #include "freeflex/trajopt/collocation.hpp"
 #include "freeflex/trajopt/solve.hpp"
+#include "trajopt/slot_table.hpp"
 
 using namespace freeflex;
 using Catch::Matchers::Contains;
@@ -110,6 +112,34 @@ ManeuverProblem elastic_problem(bool free_time, int modes) {
 }
 
 }  // namespace
+
+TEST_CASE("the Hessian's slot table agrees with std::unordered_map, growing from a small start", "[trajopt]") {
+  // keys r n + c of a banded pattern and scattered large ones; the table starts with room
+  // for 4 entries, so it grows many times on the way to 20 000
+  detail::SlotTable table(4);
+  std::unordered_map<long long, int> reference;
+  std::mt19937_64 rng(11);
+  const long long n = 50000;
+  auto add = [&](long long key) {
+    const int known = table.find(key);
+    const auto it = reference.find(key);
+    REQUIRE((known >= 0) == (it != reference.end()));
+    if (known >= 0) {
+      CHECK(known == it->second);
+      return;
+    }
+    const int slot = static_cast<int>(reference.size());
+    table.insert(key, slot);
+    reference.emplace(key, slot);
+  };
+  for (long long r = 0; r < 2000; ++r)
+    for (long long c = std::max(0LL, r - 4); c <= r; ++c) add(r * n + c);
+  for (int k = 0; k < 10000; ++k) add(static_cast<long long>(rng() % (n * n)));
+  for (long long r = 0; r < 2000; ++r) add(r * n + r);  // all present already
+  REQUIRE(reference.size() > 15000);
+  for (const auto& [key, slot] : reference) CHECK(table.find(key) == slot);
+  CHECK(table.find(n * n + 7) == -1);  // absent
+}
 
 TEST_CASE("collocation NLP derivatives match central differences", "[trajopt]") {
   const FlexibleBody body = rich_body();
