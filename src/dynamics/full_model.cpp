@@ -7,6 +7,7 @@
 #include <cstddef>
 
 #include "dynamics/body_kernels.hpp"
+#include "util/avx2_clones.hpp"
 #include "planar.hpp"
 
 namespace freeflex {
@@ -96,7 +97,7 @@ namespace {
 /// CMakeLists.txt) and no -march: a fixed NN only lets the compiler unroll and vectorize
 /// the loops over entries (no reductions are reordered; the dot products stay sequential).
 template <int NN>
-__attribute__((always_inline)) inline bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
+FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
                      const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
                      int n_runtime) {
   const ModalIntegrals& mi = body.integrals();
@@ -181,17 +182,11 @@ bool detail::full_rhs_runtime_size(const FullModel& model, FullModel::Data& d, c
 
 namespace {
 // The kernels of NOA 20 and of the run-time size compiled twice, for AVX2 and for the
-// baseline, and picked at load time (as the CVODES kernels, sim/fast_nvector.cpp; AVX2
-// without FMA and this file's -ffp-contract=off: the same bits). At NOA 20 the right-hand
-// side is bound by its arithmetic and runs 10-13% faster so (docs/benchmarks.md); at the
-// small sizes the chain of dependent operations binds it and AVX2 did not pay (NOA 6:
-// 2-3% slower), so those kernels stay as they are.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define FF_RHS_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FF_RHS_CLONES
-#endif
-FF_RHS_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
+// baseline (util/avx2_clones.hpp; this file's -ffp-contract=off: the same bits). At NOA 20
+// the right-hand side is bound by its arithmetic and runs 10-13% faster so
+// (docs/benchmarks.md); at the small sizes the chain of dependent operations binds it and
+// AVX2 did not pay (NOA 6: 2-3% slower), so those kernels stay as they are.
+FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
                              const Eigen::Ref<const Eigen::VectorXd>& x,
                              const Eigen::Ref<const Eigen::VectorXd>& commands) {
   if (body.n() == 20) return full_rhs_kernel<20>(body, rest_inverse, d, x, commands, 20);

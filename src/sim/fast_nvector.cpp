@@ -5,22 +5,17 @@
 
 #include <cmath>
 
+#include "util/avx2_clones.hpp"
+
 namespace freeflex {
 namespace {
 
 inline double* data(N_Vector v) { return NV_DATA_S(v); }
 inline sunindextype len(N_Vector v) { return NV_LENGTH_S(v); }
 
-// Each kernel is compiled twice, for AVX2 and for the baseline, and picked at load time:
-// four doubles an instruction instead of two. AVX2 without FMA: the same operations in
-// the same order, so the same bits (no multiply-add is fused on either path).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define FF_KERNEL_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FF_KERNEL_CLONES
-#endif
-
-extern "C" FF_KERNEL_CLONES void ff_linearsum(sunrealtype a, N_Vector x, sunrealtype b, N_Vector y, N_Vector z) {
+// Each kernel is compiled twice, for AVX2 and for the baseline, and picked at load time
+// (util/avx2_clones.hpp): four doubles an instruction instead of two, the same bits.
+extern "C" FREEFLEX_AVX2_CLONES void ff_linearsum(sunrealtype a, N_Vector x, sunrealtype b, N_Vector y, N_Vector z) {
   const sunindextype N = len(x);
   const double* xd = data(x);  // z may be x or y
   const double* yd = data(y);
@@ -45,12 +40,12 @@ extern "C" FF_KERNEL_CLONES void ff_linearsum(sunrealtype a, N_Vector x, sunreal
   }
   for (sunindextype i = 0; i < N; ++i) zd[i] = a * xd[i] + b * yd[i];
 }
-extern "C" FF_KERNEL_CLONES void ff_scale(sunrealtype c, N_Vector x, N_Vector z) {
+extern "C" FREEFLEX_AVX2_CLONES void ff_scale(sunrealtype c, N_Vector x, N_Vector z) {
   const double* xd = data(x);
   double* zd = data(z);
   for (sunindextype i = 0, N = len(x); i < N; ++i) zd[i] = c * xd[i];
 }
-extern "C" FF_KERNEL_CLONES sunrealtype ff_wsqrsum(N_Vector x, N_Vector w) {
+extern "C" FREEFLEX_AVX2_CLONES sunrealtype ff_wsqrsum(N_Vector x, N_Vector w) {
   // four partial sums: the sequential sum is latency-bound (the only change of rounding)
   const double *xd = data(x), *wd = data(w);
   const sunindextype N = len(x);
@@ -71,7 +66,7 @@ extern "C" sunrealtype ff_wrmsnorm(N_Vector x, N_Vector w) {
   return std::sqrt(ff_wsqrsum(x, w) / static_cast<double>(len(x)));
 }
 /// Z_i = a_i x + Y_i (the fallback N_VLinearSum(a_i, x, 1, Y_i, Z_i) rounds the same way).
-extern "C" FF_KERNEL_CLONES int ff_scaleaddmulti(int nvec, sunrealtype* a, N_Vector x, N_Vector* Y, N_Vector* Z) {
+extern "C" FREEFLEX_AVX2_CLONES int ff_scaleaddmulti(int nvec, sunrealtype* a, N_Vector x, N_Vector* Y, N_Vector* Z) {
   const sunindextype N = len(x);
   bool alias = false;
   for (int k = 0; k < nvec; ++k) alias = alias || Z[k] == x;

@@ -18,6 +18,7 @@
 
 #include "sim/rk_tableaus.hpp"
 #include "sim/stepper.hpp"
+#include "util/avx2_clones.hpp"
 #include "util/finite.hpp"
 #include "util/format.hpp"
 
@@ -44,33 +45,24 @@ struct Combination {
   int terms() const { return static_cast<int>(w.size()); }
 };
 
-// The stepper's vector loops (the kernels below), compiled for AVX2 and for the baseline
-// and picked at load time (as the CVODES kernels, sim/fast_nvector.cpp): AVX2 without FMA
-// does the same operations in the same order, so the same bits (CMakeLists.txt compiles
-// this file with -ffp-contract=off for every compiler: no multiply-add is fused).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define FF_RK_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FF_RK_CLONES
-#endif
-
+// The stepper's vector loops (the kernels below) compiled for AVX2 and for the baseline
+// (util/avx2_clones.hpp; CMakeLists.txt builds this file with -ffp-contract=off for every
+// compiler, so no multiply-add is fused and the bits are the same).
 #if defined(__GNUC__)
-#define FF_RK_INLINE __attribute__((always_inline)) inline
 #define FF_RK_VECTORS 1
+// Four doubles as one value (GCC's vector extension: AVX2 registers in the AVX2 clone, two
+// SSE2 registers in the baseline); loads and stores through memcpy, no alignment assumed.
 // V4 values pass only between always-inlined helpers, so no call's ABI depends on AVX
-// (CMakeLists.txt silences GCC's -Wpsabi note for this file)
-// four doubles as one value (GCC's vector extension: AVX2 registers in the AVX2 clone, two
-// SSE2 registers in the baseline); loads and stores through memcpy, no alignment assumed
+// (CMakeLists.txt silences GCC's -Wpsabi note for this file).
 typedef double V4 __attribute__((vector_size(32)));
-FF_RK_INLINE V4 load(const double* p) {
+FREEFLEX_ALWAYS_INLINE V4 load(const double* p) {
   V4 v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
-FF_RK_INLINE void store(double* p, V4 v) { std::memcpy(p, &v, sizeof v); }
-FF_RK_INLINE V4 splat(double x) { return V4{x, x, x, x}; }
+FREEFLEX_ALWAYS_INLINE void store(double* p, V4 v) { std::memcpy(p, &v, sizeof v); }
+FREEFLEX_ALWAYS_INLINE V4 splat(double x) { return V4{x, x, x, x}; }
 #else
-#define FF_RK_INLINE inline
 #define FF_RK_VECTORS 0
 #endif
 
@@ -78,7 +70,7 @@ FF_RK_INLINE V4 splat(double x) { return V4{x, x, x, x}; }
 /// (from start_r, or from the first term), the same bits as a loop over the terms per
 /// entry, but eight entries at a time with their sums kept in registers across the terms.
 template <bool kStart>
-FF_RK_INLINE void sum_columns(double* __restrict out, const double* __restrict start, const double* const* col,
+FREEFLEX_ALWAYS_INLINE void sum_columns(double* __restrict out, const double* __restrict start, const double* const* col,
                         const double* w, int terms, int N) {
   int r = 0;
 #if FF_RK_VECTORS
@@ -128,7 +120,7 @@ FF_RK_INLINE void sum_columns(double* __restrict out, const double* __restrict s
 
 /// s = y + h Σ_t w_t col_t over the N entries: the sum first, as Hairer's code, so that
 /// y takes one rounding.
-FF_RK_CLONES void combine_stage(double* __restrict s, const double* __restrict y, const Combination& c, int N,
+FREEFLEX_AVX2_CLONES void combine_stage(double* __restrict s, const double* __restrict y, const Combination& c, int N,
                                 double h) {
   if (c.terms() == 0) {
     for (int r = 0; r < N; ++r) s[r] = y[r];
@@ -140,13 +132,13 @@ FF_RK_CLONES void combine_stage(double* __restrict s, const double* __restrict y
 
 /// s = y + Σ_t hw_t col_t, adding term by term to y (the new solution of a pair without
 /// FSAL; hw: the weights times the step).
-FF_RK_CLONES void advance_solution(double* __restrict s, const double* __restrict y, const Combination& c,
+FREEFLEX_AVX2_CLONES void advance_solution(double* __restrict s, const double* __restrict y, const Combination& c,
                                    const double* hw, int N) {
   sum_columns<true>(s, y, c.col.data(), hw, c.terms(), N);
 }
 
 /// e = Σ_t w_t col_t over the first n entries (0 for no terms).
-FF_RK_CLONES void weigh_stages(double* __restrict e, const Combination& c, int n) {
+FREEFLEX_AVX2_CLONES void weigh_stages(double* __restrict e, const Combination& c, int n) {
   if (c.terms() == 0) {
     for (int r = 0; r < n; ++r) e[r] = 0.0;
     return;

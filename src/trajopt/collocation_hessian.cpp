@@ -11,9 +11,10 @@ namespace {
 
 /// The lower triangle of B = Lᵀ R (L, R: k x q). For k <= 4 (the rigid problems) each entry
 /// is a dot product of two columns summed in order from zero, the roundings of Eigen's
-/// product (in a build without fused multiply-adds, the default) without its set-up, which costs more than the arithmetic there (the rigid slew's
-/// whole run 0.8% fewer instructions); for the elastic problems' larger k Eigen's blocked
-/// product is faster (2.3% of the elastic slew).
+/// product (in a build without fused multiply-adds, the default) without its set-up, which
+/// costs more than the arithmetic there (the rigid slew's whole run 0.8% fewer
+/// instructions); for the elastic problems' larger k Eigen's blocked product is faster
+/// (2.3% of the elastic slew).
 void lower_product(const Eigen::MatrixXd& L, const Eigen::MatrixXd& R, Eigen::MatrixXd& B) {
   const Eigen::Index k = L.rows(), q = L.cols();
   if (k > 4) {
