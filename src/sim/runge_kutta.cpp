@@ -36,6 +36,10 @@ constexpr double kSafety = 0.8;
 constexpr double kBeta = 0.04;      ///< the new step also grows with (previous error)^beta
 constexpr double kMaxShrink = 3.0;  ///< a step is at least a third of the one before
 constexpr double kMaxGrowth = 6.0;  ///< and at most six times it
+/// A step one of whose trial stages the model refused (out of its range, not finite,
+/// thrown) is rejected and retried ten times shorter: an accepted state is never such a
+/// stage, and a solution that does leave the range reaches round-off in a few retries.
+constexpr double kFailedStageShrink = 10.0;
 
 /// A linear combination of stages: Σ_t w[t] col[t] (the columns of the stages' matrix
 /// whose weights are not zero; most a(i, j) of these pairs' later stages are zero).
@@ -198,6 +202,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     have_step_ = false;
     h_ = 0.0;
     rejected_ = false;
+    stage_failure_.clear();
     err_old_ = 1e-4;
   }
 
@@ -325,8 +330,12 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     double h = dnf <= 1e-10 || dny <= 1e-10 ? 1e-6 : std::sqrt(dny / dnf) * 0.01;
     if (options_.max_step > 0.0) h = std::min(h, options_.max_step);
     h = std::min(h, stop_ - t_);
-    for (int r = 0; r < N; ++r) stage_[r] = y_[r] + h * K_(r, 0);
-    if (!eval(t_ + h, stage_, K_.col(1))) return false;
+    for (;;) {  // an Euler trial the model refuses is shortened (as refused stages are in step())
+      for (int r = 0; r < N; ++r) stage_[r] = y_[r] + h * K_(r, 0);
+      if (eval(t_ + h, stage_, K_.col(1))) break;
+      h /= kFailedStageShrink;
+      if (!(0.1 * h > std::abs(t_) * DBL_EPSILON)) return false;
+    }
     double der2 = 0.0;
     for (int r = 0; r < n_; ++r) {
       const double sk = atol_[r] + options_.rtol * std::abs(y_[r]);
@@ -359,13 +368,26 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         to_stop = true;
       }
       if (!(0.1 * h > std::abs(t_) * DBL_EPSILON)) {
-        why_ = "the step size fell to " + fmt(h) + " s, round-off at this t: the solution may be singular, the "
-               "right-hand side discontinuous at a time that is not a breakpoint, or the problem stiff (use BDF)";
+        if (!stage_failure_.empty())  // the model refused every shorter trial: the solution leaves it here
+          why_ = stage_failure_ + " (steps down to " + fmt(h) + " s, round-off at this t, were all refused)";
+        else
+          why_ = "the step size fell to " + fmt(h) + " s, round-off at this t: the solution may be singular, the "
+                 "right-hand side discontinuous at a time that is not a breakpoint, or the problem stiff (use BDF)";
         return false;
       }
-      for (int i = 1; i < s; ++i) {
+      bool refused = false;
+      for (int i = 1; i < s && !refused; ++i) {
         form_stage(y_, h, i);
-        if (!eval(t_ + tab_.c[i] * h, stage_, K_.col(i))) return false;
+        refused = !eval(t_ + tab_.c[i] * h, stage_, K_.col(i));
+      }
+      if (refused) {
+        // A trial stage of too long a step can leave the model's range (the mass matrix of
+        // the full model in modal variables, just after a restart) where the solution does
+        // not: reject the step, as Hairer's codes do with a non-finite error.
+        stage_failure_ = why_;
+        h_ = h / kFailedStageShrink;
+        rejected_ = true;
+        continue;
       }
       // with FSAL the last stage was formed at y_n+1; else form it from b
       if (!tab_.fsal) {
@@ -379,6 +401,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         grow = std::min(kMaxGrowth, std::max(1.0 / kMaxShrink, grow));
         if (rejected_) grow = std::min(grow, 1.0);
         rejected_ = false;
+        stage_failure_.clear();
         y_old_.swap(y_);
         y_ = stage_;
         t_old_ = t_;
@@ -441,6 +464,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
   bool have_k0_ = false, have_step_ = false, dense_ready_ = false, rejected_ = false;
   long steps_ = 0, rhs_ = 0;
   std::string why_;
+  std::string stage_failure_;  ///< why the model refused a stage since the last accepted step
   double err_old_ = 1e-4;  ///< of the last accepted step (Hairer's facold)
 };
 

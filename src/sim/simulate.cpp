@@ -143,11 +143,14 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
   auto u = std::make_shared<Eigen::VectorXd>(ne);
   OdeSystem sys;
   sys.dim = 2 * N;
-  auto singular = std::make_shared<bool>(false);  // the mass matrix left the model's range
+  // the mass matrix left the model's range at the last evaluation (the explicit pairs
+  // reject a trial step the model refuses and go on, so only the last one counts)
+  auto singular = std::make_shared<bool>(false);
   sys.rhs = [&model, &excitation, data, u, singular](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
                                                      Eigen::Ref<Eigen::VectorXd> xd) {
     detail::evaluate_commands(excitation, at, *u);
-    if (!model.rhs(*data, x, *u)) return *singular = true, false;
+    *singular = !model.rhs(*data, x, *u);
+    if (*singular) return false;
     xd = data->x_dot;
     return true;
   };

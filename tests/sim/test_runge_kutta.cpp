@@ -285,6 +285,52 @@ TEST_CASE("DOP853 and Verner 9(8) reports a failing, throwing or NaN right-hand 
   CHECK(std::abs(r.x(2, 0) - std::exp(-0.2)) < 1e-8);
 }
 
+TEST_CASE("DOP853 and Verner 9(8) reject a step whose trial stage the model refuses, and go on", "[sim]") {
+  // y' = -y, whose model refuses any state more than 1e-3 from the solution e^-t (as the
+  // full model refuses a mass matrix that lost positive definiteness): loose tolerances
+  // let the steps grow until trial stages stray that far, which must shorten the step, not
+  // end the run (it did before 2026-11-27: DOP853 on the full model in modal variables at
+  // NOA 20 stopped at the restart at 0.5 s).
+  const Method method = GENERATE(Method::Dop853, Method::Verner98);
+  OdeSystem sys;
+  sys.dim = 1;
+  int refused = 0;
+  sys.rhs = [&refused](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    yd(0) = -y(0);
+    if (std::abs(y(0) - std::exp(-at.t)) <= 1e-3) return true;
+    ++refused;
+    return false;
+  };
+  sys.last_error = [] { return std::string("state out of range"); };
+  const auto r = integrate(sys, Eigen::VectorXd::Ones(1), linspace(0.0, 20.0, 5), {}, explicit_rk(method, 1e-3, 1e-3));
+  REQUIRE(r.ok());
+  CHECK(refused > 0);  // the case is exercised: trial stages were refused
+  // the answer is still the solution's (the refused stages left nothing behind); 1e-3: the
+  // loose tolerances'
+  CHECK(std::abs(r.x(4, 0) - std::exp(-20.0)) < 1e-3);
+  CHECK(std::abs(r.x(1, 0) - std::exp(-5.0)) < 1e-3);
+}
+
+TEST_CASE("DOP853 and Verner 9(8) report where the solution itself leaves the model's range", "[sim]") {
+  // y' = 1 from 0 with states above 0.5 refused: no step passes t = 0.5, and the failure
+  // keeps the model's reason and the time reached
+  const Method method = GENERATE(Method::Dop853, Method::Verner98);
+  OdeSystem sys;
+  sys.dim = 1;
+  sys.rhs = [](const Instant&, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+    yd(0) = 1.0;
+    return y(0) <= 0.5;
+  };
+  sys.last_error = [] { return std::string("state out of range"); };
+  const auto r = integrate(sys, Eigen::VectorXd::Zero(1), {0.0, 0.25, 1.0}, {}, explicit_rk(method));
+  CHECK_FALSE(r.ok());
+  CHECK_THAT(r.message, Contains("state out of range"));
+  CHECK_THAT(r.message, Contains("were all refused"));
+  // accepted steps creep up to the edge: within round-off of 0.5 after the retries
+  CHECK(r.failure_time <= 0.5);
+  CHECK(r.failure_time > 0.5 - 1e-9);
+}
+
 TEST_CASE("DOP853 and Verner 9(8) reports a blow-up as a step size fallen to round-off, near the singular time", "[sim]") {
   const Method method = GENERATE(Method::Dop853, Method::Verner98);
   OdeSystem sys;  // y' = y², y(0) = 1: y = 1 / (1 − t), singular at t = 1
