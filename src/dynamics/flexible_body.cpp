@@ -247,9 +247,14 @@ FlexibleBody::ForceDerivative FlexibleBody::generalized_force_derivative(
 
 void detail::generalized_force(const FlexibleBody& body, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
                                const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G) {
-  G.setZero();
-  for (int e = 0; e < static_cast<int>(body.elements().size()); ++e)
-    if (commands(e) != 0.0) add_element_force(body, e, theta, q, commands(e), G);
+  // plain loops: this runs at every right-hand side of the full model, where Eigen's
+  // dynamic-size set-up cost more than the sums (docs/benchmarks.md)
+  double* g = G.data();
+  for (Eigen::Index i = 0; i < G.size(); ++i) g[i] = 0.0;
+  const int ne = static_cast<int>(body.elements().size());
+  const double* u = commands.data();
+  for (int e = 0; e < ne; ++e)
+    if (u[e] != 0.0) add_element_force(body, e, theta, q, u[e], G);
 }
 
 void detail::add_element_force(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -260,8 +265,10 @@ void detail::add_element_force(const FlexibleBody& body, int e, double theta, co
   const Eigen::RowVectorXd& phi = body.element_phi(e);
   const Eigen::RowVectorXd& dphi = body.element_slope(e);
   if (el.type == ForceElement::Type::Torque) {  // eq. 6.4c: no dependence on configuration
-    G(2) += scale;
-    G.tail(n).noalias() += scale * dphi.transpose();
+    double* g = G.data();
+    const double* slope = dphi.data();
+    g[2] += scale;
+    for (int i = 0; i < n; ++i) g[3 + i] += scale * slope[i];
     return;
   }
   // Same steps as element_force, along one direction (d_theta, d_q) instead of a Jacobian.

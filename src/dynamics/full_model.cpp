@@ -110,8 +110,12 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   const double c = std::cos(th), s = std::sin(th);
   detail::generalized_force(body, th, x.segment(3, n), commands, d.G);  // R rows in inertial axes
   const double* G = d.G.data();
-  double* Mq = d.Mq.data();
-  double* Kq = d.Kq.data();
+  // With the size known the sums run in local arrays, which the compiler keeps in registers
+  // (through d's buffers it must store and reload them at every column: they might alias M).
+  constexpr int kLocal = NN > 0 ? NN : 1;
+  double Mq_local[kLocal], Kq_local[kLocal];
+  double* Mq = NN > 0 ? Mq_local : d.Mq.data();
+  double* Kq = NN > 0 ? Kq_local : d.Kq.data();
   for (int i = 0; i < n; ++i) Mq[i] = Kq[i] = 0.0;
   for (int j = 0; j < n; ++j) {
     const double* Mc = mi.M.data() + static_cast<std::ptrdiff_t>(j) * n;
@@ -147,7 +151,8 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   // 𝕄_b (Tᵀ z'') = g with 𝕄_b = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ], S = [[0, −Φ̄q], [−Φ̄q, qᵀMq]]:
   // w = y − W S (I + Uᵀ W S)⁻¹ Uᵀ y with y = 𝕄_b(0)⁻¹ g (no S⁻¹: S is singular at q = 0).
   Eigen::VectorXd& x_dot = d.x_dot;
-  double* w = x_dot.data() + N;
+  double w_local[kLocal + 3];
+  double* w = NN > 0 ? w_local : x_dot.data() + N;
   for (int i = 0; i < N; ++i) w[i] = 0.0;
   for (int j = 0; j < N; ++j) {
     const double* col = rest_inverse.data() + static_cast<std::ptrdiff_t>(j) * N;
@@ -169,6 +174,10 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   const double wx = w[0], wy = w[1];
   w[0] = c * wx - s * wy;
   w[1] = s * wx + c * wy;
+  if (NN > 0) {
+    double* out = x_dot.data() + N;
+    for (int i = 0; i < N; ++i) out[i] = w[i];
+  }
   for (int i = 0; i < N; ++i) x_dot[i] = zd[i];
   return true;
 }
