@@ -82,6 +82,21 @@ void fail(SimulationStudyResult& r, const StudyLog& study_log, const std::string
   if (study_log.warn) study_log.warn(why);
 }
 
+/// Why a run that spent the study's work budget may have: the explicit pairs in modal
+/// variables below atol 1e-13 take steps the derivatives' round-off sets (docs/theory.md
+/// section 8), hundreds of times more than needed. Empty when that is not the case.
+std::string budget_hint(const SimulationOptions& o, SimulationOptions::Variables variables) {
+  using M = IntegratorOptions::Method;
+  const bool pair = o.integrator.method == M::Dop853 || o.integrator.method == M::Verner98;
+  if (!pair || variables != SimulationOptions::Variables::Modal || !(o.integrator.atol < 1e-13) ||
+      !o.integrator.budget || !o.integrator.budget->exhausted())
+    return {};
+  return " (this run had atol " + util::format_number(o.integrator.atol, 3) +
+         ": with method \"dop853\" or \"verner98\" in modal variables an atol below 1e-13 lets the derivatives' "
+         "round-off, not the accuracy, set the steps; keep [simulation] atol at 1e-12 or above, where the error "
+         "estimate's second run has 1e-13, or integrate in physical variables)";
+}
+
 void warn(SimulationStudyResult& r, const StudyLog& study_log, const std::string& w) {
   r.warnings.push_back(w);
   if (study_log.warn) study_log.warn(w);
@@ -182,7 +197,8 @@ void settle(SimulationStudyResult& r, const StudyLog& study_log, const FlexibleB
 /// sizeable part of the motion, a warning that the result is not converged.
 template <class Simulate>
 GlobalErrorEstimate estimate_error(const char* what, const SimulationResult& run, const SimulationOptions& options,
-                                   Simulate simulate, SimulationStudyResult& r, const StudyLog& study_log) {
+                                   SimulationOptions::Variables variables, Simulate simulate, SimulationStudyResult& r,
+                                   const StudyLog& study_log) {
   std::ostream* log = study_log.log;
   const SimulationOptions tight = error_reference_options(options);
   if (log) *log << "  error estimate: " << what;
@@ -197,7 +213,7 @@ GlobalErrorEstimate estimate_error(const char* what, const SimulationResult& run
   }
   if (!e.available) {
     if (log) *log << " not available (" << e.message << ")\n";
-    const std::string w = std::string(what) + ": no global error estimate: " + e.message;
+    const std::string w = std::string(what) + ": no global error estimate: " + e.message + budget_hint(tight, variables);
     const auto& budget = options.integrator.budget;
     if (budget && budget->exhausted())
       fail(r, study_log, w);  // the study's work budget ran out in the second run: the study ends there
@@ -288,13 +304,13 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       s.drifts = Eigen::Vector3d(drift(nl_table, ce + 1, 1, t_off, E), drift(nl_table, ce + 2, 2, t_off, P),
                                  drift(nl_table, ce + 4, 1, t_off, H));
     } else if (nl.status == IntegrationStatus::Failed) {
-      fail(r, study_log, "full nonlinear simulation failed: " + nl.message);
+      fail(r, study_log, "full nonlinear simulation failed: " + nl.message + budget_hint(options, options.full_variables));
     } else if (nl.ok()) {
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
     }
     if (nl.ok() && st.error_estimate && can_run("the full nonlinear model's error estimate"))
       s.error_estimate = estimate_error(
-          "full nonlinear model", nl, options,
+          "full nonlinear model", nl, options, options.full_variables,
           [&](const SimulationOptions& tight) {
             return motion ? simulate_prescribed(body, ex, *motion, tight, false) : simulate_full(body, ex, tight);
           },
@@ -328,7 +344,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       warn(r, study_log, what + " failed: " + s.run.message);
     if (s.run.ok() && st.error_estimate && can_run("the comparison's error estimate"))
       s.error_estimate = estimate_error(
-          what.c_str(), s.run, options,
+          what.c_str(), s.run, options, options.full_variables,
           [&](const SimulationOptions& tight) {
             return motion ? simulate_prescribed(other, ex, *motion, tight, false) : simulate_full(other, ex, tight);
           },
@@ -361,7 +377,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
       if (st.error_estimate && can_run("the perturbation solution's error estimate"))
         s.error_estimate = estimate_error(
-            "perturbation solution", pt, options,
+            "perturbation solution", pt, options, options.first_order_variables,
             [&](const SimulationOptions& tight) {
               if (motion) return simulate_prescribed(body, ex, *motion, tight, true);
               return (nominal ? simulate_perturbation_about(body, ex, nominal, tight)
@@ -369,7 +385,8 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
             },
             r, study_log);
     } else if (pt.status == IntegrationStatus::Failed) {
-      fail(r, study_log, "perturbation simulation failed: " + pt.message);
+      fail(r, study_log,
+           "perturbation simulation failed: " + pt.message + budget_hint(options, options.first_order_variables));
     }
     r.perturbation = std::move(s);
   }

@@ -81,6 +81,28 @@ TEST_CASE("a [simulation] given exactly its work runs as before, one unit less f
   std::filesystem::remove_all(out);
 }
 
+TEST_CASE("a budget spent by an explicit pair in modal variables below atol 1e-13 says why", "[app][issue20]") {
+  // Round-off, not accuracy, sets those steps (docs/theory.md section 8): the message names
+  // the atol and the cure; the same cut with an atol that does not do that has no hint.
+  Design d = shipped("paper_force_pulse");  // full model in modal variables
+  REQUIRE(d.simulation);
+  SimulationOptions& o = d.simulation->options;
+  o.integrator.method = IntegratorOptions::Method::Dop853;
+  o.full_variables = o.first_order_variables = SimulationOptions::Variables::Modal;
+  d.study_work = 2'000'000;  // a few thousand steps: spent within the first run either way
+  o.integrator.atol = 1e-14;
+  const RunResult low = run_quietly(d);
+  CHECK(low.exit_code() == kExitNumericalFailure);
+  // the run that spent it is the error estimate's, at atol / 10
+  CHECK_THAT(low.message, Contains("is spent") && Contains("this run had atol 1e-15") &&
+                              Contains("keep [simulation] atol at 1e-12 or above"));
+  o.integrator.atol = 1e-12;
+  const RunResult fine = run_quietly(d);
+  CHECK(fine.exit_code() == kExitNumericalFailure);
+  CHECK_THAT(fine.message, Contains("is spent"));
+  CHECK_THAT(fine.message, !Contains("this run had atol"));
+}
+
 TEST_CASE("the [controller] study's budget covers its chain and its bang-bang designs", "[app][issue20]") {
   Design d = shipped("suppress_moment_pulse");
   REQUIRE(d.bang_bang);
