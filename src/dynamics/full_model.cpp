@@ -25,6 +25,9 @@ FullModel::FullModel(const FlexibleBody& body) : body_(body) {
   // 𝕄_b(0) is symmetric positive definite and well conditioned (the basis is orthogonal in
   // M): its inverse, formed once, turns each solve into one matrix-vector product.
   rest_inverse_ = Mb0.llt().solve(Eigen::MatrixXd::Identity(N, N));
+  // its columns padded with zeros to a multiple of four rows, for the kernels of fixed size
+  rest_inverse_padded_ = Eigen::MatrixXd::Zero((N + 3) / 4 * 4, N);
+  rest_inverse_padded_.topRows(N) = rest_inverse_;
   mq_inverse_ = body_.integrals().M.llt().solve(Eigen::MatrixXd::Identity(body_.n(), body_.n()));
 }
 
@@ -96,6 +99,16 @@ namespace {
 /// the same bits with this file's flags (no contraction into fused multiply-adds, see
 /// CMakeLists.txt) and no -march: a fixed NN only lets the compiler unroll and vectorize
 /// the loops over entries (no reductions are reordered; the dot products stay sequential).
+/// x, hidden from the optimizer: a product passed through it is rounded before any sum.
+/// GCC matches the rotations below as complex products and, on a target with FMA (the
+/// AVX-512 variant), fuses them into multiply-add/subtract whatever -ffp-contract says.
+FREEFLEX_ALWAYS_INLINE double opaque(double x) {
+#if defined(__GNUC__)
+  __asm__("" : "+x"(x));
+#endif
+  return x;
+}
+
 template <int NN>
 FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
                      const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
@@ -137,27 +150,31 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   // g = Tᵀ (G − h − K q − D z'), eq. 6.2 with the R rows in body axes:
   // Cᵀ h_R = −θ'² (S_o, Φ̄ q) − 2θ' Φ̄ q' e_x; h_θ = 2θ' qᵀ M q'; h_q = −θ'² M q.
   double* g = d.b.data();
-  g[0] = c * G[0] + s * G[1] + thd2 * mi.S_o + 2.0 * thd * Pqd;
-  g[1] = -s * G[0] + c * G[1] + thd2 * Pq;
+  g[0] = opaque(c * G[0]) + opaque(s * G[1]) + thd2 * mi.S_o + 2.0 * thd * Pqd;
+  g[1] = opaque(-s * G[0]) + opaque(c * G[1]) + thd2 * Pq;
   g[2] = G[2] - 2.0 * thd * qMqd;
   for (int i = 0; i < n; ++i) g[3 + i] = G[3 + i] + thd2 * Mq[i] - Kq[i];
   if (body.damped()) {
     d.Dzd.noalias() = body.damping() * x.tail(N);
     const double* Dz = d.Dzd.data();
-    g[0] -= c * Dz[0] + s * Dz[1];
-    g[1] -= -s * Dz[0] + c * Dz[1];
+    g[0] -= opaque(c * Dz[0]) + opaque(s * Dz[1]);
+    g[1] -= opaque(-s * Dz[0]) + opaque(c * Dz[1]);
     for (int i = 2; i < N; ++i) g[i] -= Dz[i];
   }
   // 𝕄_b (Tᵀ z'') = g with 𝕄_b = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ], S = [[0, −Φ̄q], [−Φ̄q, qᵀMq]]:
   // w = y − W S (I + Uᵀ W S)⁻¹ Uᵀ y with y = 𝕄_b(0)⁻¹ g (no S⁻¹: S is singular at q = 0).
+  // With the size known, the inverse comes with its columns padded to NP rows (zeros):
+  // whole vectors only, and each of the first N sums the same terms in the same order.
+  constexpr int NP = NN > 0 ? (NN + 3 + 3) / 4 * 4 : 1;
+  const int ld = NN > 0 ? NP : N;  // rows of rest_inverse as stored
   Eigen::VectorXd& x_dot = d.x_dot;
-  double w_local[kLocal + 3];
+  double w_local[NP];
   double* w = NN > 0 ? w_local : x_dot.data() + N;
-  for (int i = 0; i < N; ++i) w[i] = 0.0;
+  for (int i = 0; i < ld; ++i) w[i] = 0.0;
   for (int j = 0; j < N; ++j) {
-    const double* col = rest_inverse.data() + static_cast<std::ptrdiff_t>(j) * N;
+    const double* col = rest_inverse.data() + static_cast<std::ptrdiff_t>(j) * ld;
     const double gj = g[j];
-    for (int i = 0; i < N; ++i) w[i] += col[i] * gj;
+    for (int i = 0; i < ld; ++i) w[i] += col[i] * gj;
   }
   const double a = -Pq, cc = qMq;
   const double W00 = rest_inverse(0, 0), W01 = rest_inverse(0, 2), W20 = rest_inverse(2, 0),
@@ -169,11 +186,11 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   const double v0 = (k11 * w[0] - k01 * w[2]) / det, v1 = (k00 * w[2] - k10 * w[0]) / det;
   const double Sv0 = a * v1, Sv1 = a * v0 + cc * v1;
   const double* W0 = rest_inverse.data();
-  const double* W2 = rest_inverse.data() + 2 * static_cast<std::ptrdiff_t>(N);
-  for (int i = 0; i < N; ++i) w[i] -= W0[i] * Sv0 + W2[i] * Sv1;
+  const double* W2 = rest_inverse.data() + 2 * static_cast<std::ptrdiff_t>(ld);
+  for (int i = 0; i < ld; ++i) w[i] -= W0[i] * Sv0 + W2[i] * Sv1;
   const double wx = w[0], wy = w[1];
-  w[0] = c * wx - s * wy;
-  w[1] = s * wx + c * wy;
+  w[0] = opaque(c * wx) - opaque(s * wy);
+  w[1] = opaque(s * wx) + opaque(c * wy);
   if (NN > 0) {
     double* out = x_dot.data() + N;
     for (int i = 0; i < N; ++i) out[i] = w[i];
@@ -195,13 +212,50 @@ namespace {
 // the right-hand side is bound by its arithmetic and runs 10-13% faster so
 // (docs/benchmarks.md); at the small sizes the chain of dependent operations binds it and
 // AVX2 did not pay (NOA 6: 2-3% slower), so those kernels stay as they are.
-FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
-                             const Eigen::Ref<const Eigen::VectorXd>& x,
-                             const Eigen::Ref<const Eigen::VectorXd>& commands) {
-  if (body.n() == 20) return full_rhs_kernel<20>(body, rest_inverse, d, x, commands, 20);
+FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse,
+                                   const Eigen::MatrixXd& rest_inverse_padded, FullModel::Data& d,
+                                   const Eigen::Ref<const Eigen::VectorXd>& x,
+                                   const Eigen::Ref<const Eigen::VectorXd>& commands) {
+  if (body.n() == 20) return full_rhs_kernel<20>(body, rest_inverse_padded, d, x, commands, 20);
   return full_rhs_kernel<0>(body, rest_inverse, d, x, commands, body.n());
 }
+
+// And a third time with 512-bit vectors where the processor has AVX-512: half the vector
+// operations of AVX2, 7-16% less time at NOA 20 (docs/benchmarks.md). Still no fused
+// multiply-add (AVX-512 implies FMA, so the rotations are kept from fusing by opaque()
+// above), so the same bits as the other two (tested).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define FF_FULL_AVX512 1
+__attribute__((target("avx512f,avx512vl,prefer-vector-width=512"))) bool large_rhs_512(
+    const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, const Eigen::MatrixXd& rest_inverse_padded,
+    FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands) {
+  if (body.n() == 20) return full_rhs_kernel<20>(body, rest_inverse_padded, d, x, commands, 20);
+  return full_rhs_kernel<0>(body, rest_inverse, d, x, commands, body.n());
+}
+#else
+#define FF_FULL_AVX512 0
+#endif
 }  // namespace
+
+bool detail::full_rhs_avx512_available() {
+#if FF_FULL_AVX512
+  static const bool ok = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  return ok;
+#else
+  return false;
+#endif
+}
+
+bool detail::full_rhs_large(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                            const Eigen::Ref<const Eigen::VectorXd>& commands, bool avx512) {
+#if FF_FULL_AVX512
+  if (avx512 && full_rhs_avx512_available())
+    return large_rhs_512(model.body(), model.rest_inverse(), model.rest_inverse_padded(), d, x, commands);
+#else
+  (void)avx512;
+#endif
+  return large_rhs(model.body(), model.rest_inverse(), model.rest_inverse_padded(), d, x, commands);
+}
 
 bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                     const Eigen::Ref<const Eigen::VectorXd>& commands) const {
@@ -212,11 +266,11 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   // kernel of their own (NOA 6, the paper's, took 1 516 instructions a call at run-time
   // size; docs/benchmarks.md).
   switch (body_.n()) {
-    case 4: return full_rhs_kernel<4>(body_, rest_inverse_, d, x, commands, 4);
-    case 6: return full_rhs_kernel<6>(body_, rest_inverse_, d, x, commands, 6);
-    case 8: return full_rhs_kernel<8>(body_, rest_inverse_, d, x, commands, 8);
-    case 10: return full_rhs_kernel<10>(body_, rest_inverse_, d, x, commands, 10);
-    default: return large_rhs(body_, rest_inverse_, d, x, commands);
+    case 4: return full_rhs_kernel<4>(body_, rest_inverse_padded_, d, x, commands, 4);
+    case 6: return full_rhs_kernel<6>(body_, rest_inverse_padded_, d, x, commands, 6);
+    case 8: return full_rhs_kernel<8>(body_, rest_inverse_padded_, d, x, commands, 8);
+    case 10: return full_rhs_kernel<10>(body_, rest_inverse_padded_, d, x, commands, 10);
+    default: return detail::full_rhs_large(*this, d, x, commands, true);
   }
 }
 

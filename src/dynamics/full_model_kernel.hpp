@@ -12,4 +12,12 @@ namespace freeflex::detail {
 bool full_rhs_runtime_size(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                            const Eigen::Ref<const Eigen::VectorXd>& commands);
 
+/// FullModel::rhs for a size without a kernel of its own (not NOA 4-10), through the
+/// variant with 512-bit vectors when `avx512` and the processor has AVX-512, else through
+/// the AVX2 or baseline one: all three give the same bits.
+bool full_rhs_large(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                    const Eigen::Ref<const Eigen::VectorXd>& commands, bool avx512);
+/// Whether this build and processor have the AVX-512 variant.
+bool full_rhs_avx512_available();
+
 }  // namespace freeflex::detail

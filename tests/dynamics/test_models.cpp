@@ -287,6 +287,33 @@ TEST_CASE("the full model's kernels for fixed sizes give the run-time kernel's n
   }
 }
 
+TEST_CASE("the full model's AVX-512 variant gives the bits of the AVX2 or baseline one", "[dynamics]") {
+  // NOA 20 and the run-time size (13) run with 512-bit vectors where the processor has
+  // AVX-512; with no fused multiply-add (the rotations are kept from fusing, which GCC did
+  // there whatever -ffp-contract said) the numbers must be those of the other variants.
+  if (!detail::full_rhs_avx512_available()) {
+    WARN("no AVX-512 on this processor: the variant is not compared");
+    return;
+  }
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int n : {20, 13}) {
+    const FlexibleBody body = rich_body(n, {0.01, 0.02});
+    const FullModel model(body);
+    FullModel::Data a = model.create_data(), b = model.create_data();
+    const int N = body.dofs();
+    for (int trial = 0; trial < 200; ++trial) {
+      Eigen::VectorXd x(2 * N), u(body.elements().size());
+      for (int i = 0; i < 2 * N; ++i) x(i) = U(gen) * (i < 3 || (i >= N && i < N + 3) ? 3.0 : 0.05);
+      for (int e = 0; e < u.size(); ++e) u(e) = U(gen);
+      REQUIRE(detail::full_rhs_large(model, a, x, u, true));
+      REQUIRE(detail::full_rhs_large(model, b, x, u, false));
+      INFO("n = " << n << ", trial " << trial);
+      CHECK(a.x_dot == b.x_dot);  // same operations in the same order: same bits
+    }
+  }
+}
+
 TEST_CASE("one workspace serves the first-order state space at every instant and input count", "[dynamics]") {
   // state_space(data, at) rewrites all of A, B, g each call: a workspace reused across
   // models with other inputs, or whose matrices a caller changed, gives a fresh one's answer

@@ -26,6 +26,9 @@ class FullModel {
   const FlexibleBody& body() const { return body_; }
   /// 𝕄_b(0)⁻¹, the body-frame mass matrix at rest inverted once (see rhs).
   const Eigen::MatrixXd& rest_inverse() const { return rest_inverse_; }
+  /// The same with its columns padded with zero rows to a multiple of 4 (whole vectors for
+  /// the right-hand side's kernels).
+  const Eigen::MatrixXd& rest_inverse_padded() const { return rest_inverse_padded_; }
   int state_size() const { return 2 * body_.dofs(); }
   Data create_data() const;
 
@@ -75,8 +78,9 @@ class FullModel {
   bool rhs_stiffened(Data& data, const Eigen::Ref<const Eigen::VectorXd>& x,
                      const Eigen::Ref<const Eigen::VectorXd>& commands) const;
   const FlexibleBody& body_;
-  Eigen::MatrixXd rest_inverse_;  ///< 𝕄_b(0)⁻¹
-  Eigen::MatrixXd mq_inverse_;    ///< M⁻¹ (prescribed motion)
+  Eigen::MatrixXd rest_inverse_;         ///< 𝕄_b(0)⁻¹
+  Eigen::MatrixXd rest_inverse_padded_;  ///< the same, its columns padded with zeros to a multiple of 4 rows
+  Eigen::MatrixXd mq_inverse_;           ///< M⁻¹ (prescribed motion)
 };
 
 }  // namespace freeflex
