@@ -103,7 +103,7 @@ namespace {
 /// GCC matches the rotations below as complex products and, on a target with FMA (the
 /// AVX-512 variant), fuses them into multiply-add/subtract whatever -ffp-contract says.
 FREEFLEX_ALWAYS_INLINE double opaque(double x) {
-#if defined(__GNUC__)
+#if defined(__x86_64__) && defined(__GNUC__)  // "x": an SSE register (the only target with that variant)
   __asm__("" : "+x"(x));
 #endif
   return x;
