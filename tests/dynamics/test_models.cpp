@@ -257,6 +257,27 @@ TEST_CASE("a body on a caller's basis is the body on that basis, and no basis is
   CHECK_THROWS_WITH(FlexibleBody(beam, std::shared_ptr<const ShapeBasis>(), torque), Catch::Contains("no shape basis"));
 }
 
+namespace {
+/// f(model, x, u, a, b) at 200 random states and commands of rich_body(n) (rigid
+/// coordinates and rates up to 3, elastic ones up to 0.05), with two workspaces.
+template <class F>
+void at_random_states(int n, unsigned seed, F&& f) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const FlexibleBody body = rich_body(n, {0.01, 0.02});
+  const FullModel model(body);
+  FullModel::Data a = model.create_data(), b = model.create_data();
+  const int N = body.dofs();
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::VectorXd x(2 * N), u(body.elements().size());
+    for (int i = 0; i < 2 * N; ++i) x(i) = U(gen) * (i < 3 || (i >= N && i < N + 3) ? 3.0 : 0.05);
+    for (int e = 0; e < u.size(); ++e) u(e) = U(gen);
+    INFO("n = " << n << ", trial " << trial);
+    f(model, x, u, a, b);
+  }
+}
+}  // namespace
+
 TEST_CASE("the full model's kernels for fixed sizes give the run-time kernel's numbers", "[dynamics]") {
   // FullModel::rhs compiles its loops for 4, 6, 8, 10 and 20 elastic coordinates; with
   // the same operations in the same order they must give the same bits as the kernel of
@@ -267,24 +288,14 @@ TEST_CASE("the full model's kernels for fixed sizes give the run-time kernel's n
 #else
   const double tol = 0.0;  // same operations, same order: same bits
 #endif
-  std::mt19937 gen(7);
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  for (int n : {4, 6, 8, 10, 20}) {
-    const FlexibleBody body = rich_body(n, {0.01, 0.02});
-    const FullModel model(body);
-    FullModel::Data a = model.create_data(), b = model.create_data();
-    const int N = body.dofs();
-    for (int trial = 0; trial < 200; ++trial) {
-      Eigen::VectorXd x(2 * N), u(body.elements().size());
-      for (int i = 0; i < 2 * N; ++i) x(i) = U(gen) * (i < 3 || (i >= N && i < N + 3) ? 3.0 : 0.05);
-      for (int e = 0; e < u.size(); ++e) u(e) = U(gen);
+  for (int n : {4, 6, 8, 10, 20})
+    at_random_states(n, 7, [&](const FullModel& model, const Eigen::VectorXd& x, const Eigen::VectorXd& u,
+                               FullModel::Data& a, FullModel::Data& b) {
       REQUIRE(model.rhs(a, x, u));
       REQUIRE(detail::full_rhs_runtime_size(model, b, x, u));
       const double scale = b.x_dot.cwiseAbs().maxCoeff();
-      INFO("n = " << n << ", trial " << trial);
       CHECK((a.x_dot - b.x_dot).cwiseAbs().maxCoeff() <= tol * scale);
-    }
-  }
+    });
 }
 
 TEST_CASE("the full model's AVX-512 variant gives the bits of the AVX2 or baseline one", "[dynamics]") {
@@ -295,23 +306,13 @@ TEST_CASE("the full model's AVX-512 variant gives the bits of the AVX2 or baseli
     WARN("no AVX-512 on this processor: the variant is not compared");
     return;
   }
-  std::mt19937 gen(11);
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  for (int n : {20, 13}) {
-    const FlexibleBody body = rich_body(n, {0.01, 0.02});
-    const FullModel model(body);
-    FullModel::Data a = model.create_data(), b = model.create_data();
-    const int N = body.dofs();
-    for (int trial = 0; trial < 200; ++trial) {
-      Eigen::VectorXd x(2 * N), u(body.elements().size());
-      for (int i = 0; i < 2 * N; ++i) x(i) = U(gen) * (i < 3 || (i >= N && i < N + 3) ? 3.0 : 0.05);
-      for (int e = 0; e < u.size(); ++e) u(e) = U(gen);
+  for (int n : {20, 13})
+    at_random_states(n, 11, [&](const FullModel& model, const Eigen::VectorXd& x, const Eigen::VectorXd& u,
+                                FullModel::Data& a, FullModel::Data& b) {
       REQUIRE(detail::full_rhs_large(model, a, x, u, true));
       REQUIRE(detail::full_rhs_large(model, b, x, u, false));
-      INFO("n = " << n << ", trial " << trial);
       CHECK(a.x_dot == b.x_dot);  // same operations in the same order: same bits
-    }
-  }
+    });
 }
 
 TEST_CASE("one workspace serves the first-order state space at every instant and input count", "[dynamics]") {
