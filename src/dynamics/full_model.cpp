@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 
 #include "dynamics/body_kernels.hpp"
 #include "util/avx2_clones.hpp"
@@ -40,6 +41,7 @@ FullModel::Data FullModel::create_data() const {
   d.Mq.resize(body_.n());
   d.Kq.resize(body_.n());
   d.Dzd.resize(N);
+  d.split.resize(4 * body_.n() + 2 * N);  // the split sums of the run-time-size kernel
   if (body_.geometric_stiffening()) {
     d.Hq.resize(body_.n());
     d.Hqd.resize(body_.n());
@@ -94,11 +96,6 @@ Eigen::VectorXd FullModel::residual(const Eigen::Ref<const Eigen::VectorXd>& z,
 
 namespace {
 
-/// The body of FullModel::rhs for NN elastic coordinates known at compile time (NN > 0)
-/// or at run time (NN = 0, n given). The same operations in the same order either way, so
-/// the same bits with this file's flags (no contraction into fused multiply-adds, see
-/// CMakeLists.txt) and no -march: a fixed NN only lets the compiler unroll and vectorize
-/// the loops over entries (no reductions are reordered; the dot products stay sequential).
 /// x, hidden from the optimizer: a product passed through it is rounded before any sum.
 /// GCC matches the rotations below as complex products and, on a target with FMA (the
 /// AVX-512 variant), fuses them into multiply-add/subtract whatever -ffp-contract says.
@@ -109,7 +106,27 @@ FREEFLEX_ALWAYS_INLINE double opaque(double x) {
   return x;
 }
 
-template <int NN>
+#if defined(__GNUC__)
+typedef double V4 __attribute__((vector_size(32)));
+FREEFLEX_ALWAYS_INLINE V4 load4(const double* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+#endif
+
+/// The body of FullModel::rhs for NN elastic coordinates known at compile time (NN > 0)
+/// or at run time (NN = 0, n given). The same operations in the same order either way, so
+/// the same bits with this file's flags (no contraction into fused multiply-adds, see
+/// CMakeLists.txt) and no -march: a fixed NN only lets the compiler unroll and vectorize
+/// the loops over entries (no reductions are reordered).
+///
+/// kSplit (the sizes without a kernel of their own, NOA 20 among them) sums in another
+/// fixed order, with shorter chains of dependent additions, which bind the large sizes:
+/// M q, K q and the elastic columns of 𝕄_b(0)⁻¹ g each as two interleaved halves added at
+/// the end, and the four dot products four terms at a time. A different rounding from the
+/// sequential order (tested to 1e-12 relative), and the same bits in every variant.
+template <int NN, bool kSplit = false>
 FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, FullModel::Data& d,
                      const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands,
                      int n_runtime) {
@@ -129,23 +146,71 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   double Mq_local[kLocal], Kq_local[kLocal];
   double* Mq = NN > 0 ? Mq_local : d.Mq.data();
   double* Kq = NN > 0 ? Kq_local : d.Kq.data();
-  for (int i = 0; i < n; ++i) Mq[i] = Kq[i] = 0.0;
-  for (int j = 0; j < n; ++j) {
-    const double* Mc = mi.M.data() + static_cast<std::ptrdiff_t>(j) * n;
-    const double* Kc = mi.K.data() + static_cast<std::ptrdiff_t>(j) * n;
-    const double qj = q[j];
-    for (int i = 0; i < n; ++i) {
-      Mq[i] += Mc[i] * qj;
-      Kq[i] += Kc[i] * qj;
+  // scratch of the split sums: on the stack for a fixed size, in the workspace otherwise
+  double split_local[kSplit && NN > 0 ? 4 * NN + 2 * ((NN + 3 + 3) / 4 * 4) : 1];
+  double* split = NN > 0 ? split_local : d.split.data();
+  if constexpr (kSplit) {
+    const int h = n / 2;
+    for (int pass = 0; pass < 2; ++pass) {  // M, then K
+      const double* A = pass == 0 ? mi.M.data() : mi.K.data();
+      double* out = pass == 0 ? Mq : Kq;
+      double* lo = split;
+      double* hi = split + n;
+      for (int i = 0; i < n; ++i) lo[i] = hi[i] = 0.0;
+      for (int k = 0; k < h; ++k) {
+        const double* c1 = A + static_cast<std::ptrdiff_t>(k) * n;
+        const double* c2 = A + static_cast<std::ptrdiff_t>(h + k) * n;
+        const double q1 = q[k], q2 = q[h + k];
+        for (int i = 0; i < n; ++i) {
+          lo[i] += c1[i] * q1;
+          hi[i] += c2[i] * q2;
+        }
+      }
+      if (n % 2 == 1) {
+        const double* c2 = A + static_cast<std::ptrdiff_t>(n - 1) * n;
+        for (int i = 0; i < n; ++i) hi[i] += c2[i] * q[n - 1];
+      }
+      for (int i = 0; i < n; ++i) out[i] = lo[i] + hi[i];
+    }
+  } else {
+    for (int i = 0; i < n; ++i) Mq[i] = Kq[i] = 0.0;
+    for (int j = 0; j < n; ++j) {
+      const double* Mc = mi.M.data() + static_cast<std::ptrdiff_t>(j) * n;
+      const double* Kc = mi.K.data() + static_cast<std::ptrdiff_t>(j) * n;
+      const double qj = q[j];
+      for (int i = 0; i < n; ++i) {
+        Mq[i] += Mc[i] * qj;
+        Kq[i] += Kc[i] * qj;
+      }
     }
   }
   double Pq = 0.0, Pqd = 0.0, qMq = 0.0, qMqd = 0.0;
   const double* Pb = mi.Phi_bar.data();
 #if defined(__GNUC__)
-  {
+  if constexpr (kSplit) {
+    // each dot product four terms at a time, (s0 + s1) + (s2 + s3), then the rest in order
+    V4 aP = {0.0, 0.0, 0.0, 0.0}, aPd = aP, aM = aP, aMd = aP;
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+      const V4 vq = load4(q + i), vqd = load4(qd + i), vP = load4(Pb + i), vM = load4(Mq + i);
+      aP += vP * vq;
+      aPd += vP * vqd;
+      aM += vq * vM;
+      aMd += vqd * vM;
+    }
+    Pq = (aP[0] + aP[1]) + (aP[2] + aP[3]);
+    Pqd = (aPd[0] + aPd[1]) + (aPd[2] + aPd[3]);
+    qMq = (aM[0] + aM[1]) + (aM[2] + aM[3]);
+    qMqd = (aMd[0] + aMd[1]) + (aMd[2] + aMd[3]);
+    for (; i < n; ++i) {
+      Pq += Pb[i] * q[i];
+      Pqd += Pb[i] * qd[i];
+      qMq += q[i] * Mq[i];
+      qMqd += qd[i] * Mq[i];
+    }
+  } else {
     // the four dot products as the lanes of one vector: each lane still sums its terms in
     // order (the same bits), one vector operation doing the work of four
-    typedef double V4 __attribute__((vector_size(32)));
     V4 acc = {0.0, 0.0, 0.0, 0.0};
     for (int i = 0; i < n; ++i) acc += V4{Pb[i], Pb[i], q[i], qd[i]} * V4{q[i], qd[i], Mq[i], Mq[i]};
     Pq = acc[0], Pqd = acc[1], qMq = acc[2], qMqd = acc[3];
@@ -181,11 +246,38 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   Eigen::VectorXd& x_dot = d.x_dot;
   double w_local[NP];
   double* w = NN > 0 ? w_local : x_dot.data() + N;
-  for (int i = 0; i < ld; ++i) w[i] = 0.0;
-  for (int j = 0; j < N; ++j) {
-    const double* col = rest_inverse.data() + static_cast<std::ptrdiff_t>(j) * ld;
-    const double gj = g[j];
-    for (int i = 0; i < ld; ++i) w[i] += col[i] * gj;
+  if constexpr (kSplit) {
+    // the elastic columns as two interleaved halves (they wait only for M q and K q), the
+    // three rigid ones (which wait for the dot products) apart; added at the end
+    const int h = n / 2;
+    double* lo = split + 2 * n;
+    double* hi = lo + ld;
+    for (int i = 0; i < ld; ++i) lo[i] = hi[i] = 0.0;
+    for (int k = 0; k < h; ++k) {
+      const int j1 = 3 + k, j2 = 3 + h + k;
+      const double* c1 = rest_inverse.data() + static_cast<std::ptrdiff_t>(j1) * ld;
+      const double* c2 = rest_inverse.data() + static_cast<std::ptrdiff_t>(j2) * ld;
+      const double g1 = g[j1], g2 = g[j2];
+      for (int i = 0; i < ld; ++i) {
+        lo[i] += c1[i] * g1;
+        hi[i] += c2[i] * g2;
+      }
+    }
+    if (n % 2 == 1) {
+      const double* c2 = rest_inverse.data() + static_cast<std::ptrdiff_t>(N - 1) * ld;
+      for (int i = 0; i < ld; ++i) hi[i] += c2[i] * g[N - 1];
+    }
+    const double* c0 = rest_inverse.data();
+    const double* c1 = c0 + ld;
+    const double* c2 = c1 + ld;
+    for (int i = 0; i < ld; ++i) w[i] = ((c0[i] * g[0] + c1[i] * g[1]) + c2[i] * g[2]) + (lo[i] + hi[i]);
+  } else {
+    for (int i = 0; i < ld; ++i) w[i] = 0.0;
+    for (int j = 0; j < N; ++j) {
+      const double* col = rest_inverse.data() + static_cast<std::ptrdiff_t>(j) * ld;
+      const double gj = g[j];
+      for (int i = 0; i < ld; ++i) w[i] += col[i] * gj;
+    }
   }
   const double a = -Pq, cc = qMq;
   const double W00 = rest_inverse(0, 0), W01 = rest_inverse(0, 2), W20 = rest_inverse(2, 0),
@@ -214,6 +306,14 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
 
 bool detail::full_rhs_runtime_size(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                                    const Eigen::Ref<const Eigen::VectorXd>& commands) {
+  const int n = model.body().n();
+  if (n == 4 || n == 6 || n == 8 || n == 10)  // the sizes with a kernel of their own
+    return full_rhs_kernel<0>(model.body(), model.rest_inverse(), d, x, commands, n);
+  return full_rhs_kernel<0, true>(model.body(), model.rest_inverse(), d, x, commands, n);
+}
+
+bool detail::full_rhs_sequential(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                 const Eigen::Ref<const Eigen::VectorXd>& commands) {
   return full_rhs_kernel<0>(model.body(), model.rest_inverse(), d, x, commands, model.body().n());
 }
 
@@ -227,8 +327,8 @@ FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::Matri
                                    const Eigen::MatrixXd& rest_inverse_padded, FullModel::Data& d,
                                    const Eigen::Ref<const Eigen::VectorXd>& x,
                                    const Eigen::Ref<const Eigen::VectorXd>& commands) {
-  if (body.n() == 20) return full_rhs_kernel<20>(body, rest_inverse_padded, d, x, commands, 20);
-  return full_rhs_kernel<0>(body, rest_inverse, d, x, commands, body.n());
+  if (body.n() == 20) return full_rhs_kernel<20, true>(body, rest_inverse_padded, d, x, commands, 20);
+  return full_rhs_kernel<0, true>(body, rest_inverse, d, x, commands, body.n());
 }
 
 // And a third time with 512-bit vectors where the processor has AVX-512: half the vector
@@ -240,8 +340,8 @@ FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::Matri
 __attribute__((target("avx512f,avx512vl,prefer-vector-width=512"))) bool large_rhs_512(
     const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, const Eigen::MatrixXd& rest_inverse_padded,
     FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands) {
-  if (body.n() == 20) return full_rhs_kernel<20>(body, rest_inverse_padded, d, x, commands, 20);
-  return full_rhs_kernel<0>(body, rest_inverse, d, x, commands, body.n());
+  if (body.n() == 20) return full_rhs_kernel<20, true>(body, rest_inverse_padded, d, x, commands, 20);
+  return full_rhs_kernel<0, true>(body, rest_inverse, d, x, commands, body.n());
 }
 #else
 #define FF_FULL_AVX512 0

@@ -8,9 +8,15 @@
 namespace freeflex::detail {
 
 /// FullModel::rhs (without geometric stiffening) through the kernel whose number of
-/// elastic coordinates is a run-time value, whatever the body's size.
+/// elastic coordinates is a run-time value, whatever the body's size, summing in the order
+/// FullModel::rhs takes for that size.
 bool full_rhs_runtime_size(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                            const Eigen::Ref<const Eigen::VectorXd>& commands);
+
+/// The run-time-size kernel with every sum in sequential order, as the kernels of NOA 4-10
+/// sum (FullModel::rhs takes the split order for the other sizes): a reference for it.
+bool full_rhs_sequential(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                         const Eigen::Ref<const Eigen::VectorXd>& commands);
 
 /// FullModel::rhs for a size without a kernel of its own (not NOA 4-10), through the
 /// variant with 512-bit vectors when `avx512` and the processor has AVX-512, else through

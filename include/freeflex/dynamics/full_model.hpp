@@ -15,7 +15,7 @@ class FullModel {
   /// threads, each with its own Data.
   struct Data {
     Eigen::VectorXd x_dot;  ///< x' from the last rhs()
-    Eigen::VectorXd G, b, Mq, Kq, Dzd;  // scratch
+    Eigen::VectorXd G, b, Mq, Kq, Dzd, split;  // scratch
     Eigen::VectorXd Hq, Hqd, Gq, Wv;    // scratch of the stiffened model
     Eigen::VectorXd xq_dot;             ///< [q', q''] from the last prescribed_rhs()
     Eigen::VectorXd zd_full;            // scratch of prescribed_rhs()
