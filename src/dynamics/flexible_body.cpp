@@ -2,6 +2,7 @@
 // and their derivatives, modal damping, vibration energy.
 #include "freeflex/dynamics/flexible_body.hpp"
 
+#include <cassert>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -252,6 +253,7 @@ void detail::generalized_force(const FlexibleBody& body, double theta, const Eig
   double* g = G.data();
   for (Eigen::Index i = 0; i < G.size(); ++i) g[i] = 0.0;
   const int ne = static_cast<int>(body.elements().size());
+  assert(commands.size() >= ne);
   const double* u = commands.data();
   for (int e = 0; e < ne; ++e)
     if (u[e] != 0.0) add_element_force(body, e, theta, q, u[e], G);

@@ -3,6 +3,7 @@
 
 #include "dynamics/full_model_kernel.hpp"
 
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -243,6 +244,7 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   // whole vectors only, and each of the first N sums the same terms in the same order.
   constexpr int NP = NN > 0 ? (NN + 3 + 3) / 4 * 4 : 1;
   const int ld = NN > 0 ? NP : N;  // rows of rest_inverse as stored
+  assert(rest_inverse.rows() == ld);  // the padded inverse for a fixed size, the plain one otherwise
   Eigen::VectorXd& x_dot = d.x_dot;
   double w_local[NP];
   double* w = NN > 0 ? w_local : x_dot.data() + N;
@@ -335,7 +337,7 @@ FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::Matri
 // operations of AVX2, 7-16% less time at NOA 20 (docs/benchmarks.md). Still no fused
 // multiply-add (AVX-512 implies FMA, so the rotations are kept from fusing by opaque()
 // above), so the same bits as the other two (tested).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(_WIN32)  // GCC PR 54412
 #define FF_FULL_AVX512 1
 __attribute__((target("avx512f,avx512vl,prefer-vector-width=512"))) bool large_rhs_512(
     const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, const Eigen::MatrixXd& rest_inverse_padded,

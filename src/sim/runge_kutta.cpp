@@ -162,6 +162,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     stage_.setZero(N);
     e_sum_.setZero(n_);
     K_.setZero(N, tab_.dense_stages);
+    k_next_.setZero(N);
     Q_.setZero(N, tab_.dense.cols());
     if (nq_ > 0) x_quad_.setZero(n_);
     const VariableChange& change = system.variables;
@@ -198,7 +199,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     y_.tail(nq_) = Eigen::Map<const Eigen::VectorXd>(quad, nq_);
     t_ = t;
     piece_mid_ = piece_mid;
-    have_k0_ = false;     // the new piece's loads: k_0 and the first step are found again
+    k0_ = K0::Evaluate;   // the new piece's loads: k_0 and the first step are found again
     have_step_ = false;
     h_ = 0.0;
     rejected_ = false;
@@ -217,8 +218,8 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         break;
       }
       if (have_step_ && tout < t_ && tout >= t_old_) {
-        if (!interpolate(tout)) return failed(out);
-        break;
+        if (interpolate(tout)) break;
+        continue;  // the step was taken back (a refused stage of its interpolant): step again
       }
       if (taken >= max_steps) {
         out.message = std::string(tab_.name) + " failed at t = " + fmt(t_) + ": " +
@@ -334,7 +335,10 @@ class RungeKuttaStepper final : public detail::PieceStepper {
       for (int r = 0; r < N; ++r) stage_[r] = y_[r] + h * K_(r, 0);
       if (eval(t_ + h, stage_, K_.col(1))) break;
       h /= kFailedStageShrink;
-      if (!(0.1 * h > std::abs(t_) * DBL_EPSILON)) return false;
+      if (!above_round_off(h)) {
+        why_ += " (starting steps down to " + fmt(h) + " s, round-off at this t, were all refused)";
+        return false;
+      }
     }
     double der2 = 0.0;
     for (int r = 0; r < n_; ++r) {
@@ -348,15 +352,24 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     return true;
   }
 
+  /// Whether a step h from t_ is above round-off: of t_, or of the piece's span at t_ = 0
+  /// (where |t_| eps is 0 and a refused step would be cut down to underflow).
+  bool above_round_off(double h) const {
+    return 0.1 * h > std::max(std::abs(t_), std::abs(stop_ - t_)) * DBL_EPSILON;
+  }
+
   /// One accepted step towards stop_ (after any rejections); false with why_ set.
   bool step() {
     const int s = tab_.stages;
-    if (!have_k0_) {
-      if (!eval(t_, y_, K_.col(0))) return false;
-      have_k0_ = true;
-    } else if (tab_.fsal) {
-      K_.col(0) = K_.col(s - 1);
+    switch (k0_) {
+      case K0::Evaluate:
+        if (!eval(t_, y_, K_.col(0))) return false;  // at an accepted state: the model's range is left
+        break;
+      case K0::LastStage: K_.col(0) = K_.col(s - 1); break;
+      case K0::Next: K_.col(0) = k_next_; break;
+      case K0::Current: break;
     }
+    k0_ = K0::Current;
     if (h_ == 0.0 && !initial_step()) return false;
     const double expo = 1.0 / (tab_.error_order + 1) - 0.2 * kBeta;  // Hairer's exponent with memory
     for (;;) {
@@ -367,7 +380,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         h = stop_ - t_;
         to_stop = true;
       }
-      if (!(0.1 * h > std::abs(t_) * DBL_EPSILON)) {
+      if (!above_round_off(h)) {
         if (!stage_failure_.empty())  // the model refused every shorter trial: the solution leaves it here
           why_ = stage_failure_ + " (steps down to " + fmt(h) + " s, round-off at this t, were all refused)";
         else
@@ -395,6 +408,15 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         advance_solution(stage_.data(), y_.data(), b_, hb_.data(), n_ + nq_);
       }
       const double err = error_norm(h, stage_);
+      // A pair without FSAL evaluates its new point now, not at the next step: a point the
+      // model refuses is a rejected step, not the end of the run (the value is the next
+      // step's k_0, so this costs nothing; at a piece's end the next piece evaluates anew).
+      if (err <= 1.0 && !tab_.fsal && !to_stop && !eval(t_ + h, stage_, k_next_)) {
+        stage_failure_ = why_;
+        h_ = h / kFailedStageShrink;
+        rejected_ = true;
+        continue;
+      }
       if (err <= 1.0) {
         double grow = err > 0.0 ? kSafety * std::pow(err, -expo) * std::pow(err_old_, kBeta) : kMaxGrowth;
         err_old_ = std::max(err, 1e-4);
@@ -410,24 +432,29 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         h_ = h * grow;
         have_step_ = true;
         dense_ready_ = false;
-        if (!tab_.fsal) have_k0_ = false;
+        k0_ = tab_.fsal ? K0::LastStage : to_stop ? K0::Evaluate : K0::Next;
         ++steps_;
         return true;
       }
       // rejected (a non-finite error too: the step shrinks until it is too small)
+      stage_failure_.clear();  // this trial's stages were all taken: the model refused none
       const double shrink = std::isfinite(err) ? std::min(kMaxShrink, std::pow(err, expo) / kSafety) : kMaxShrink;
       h_ = h / shrink;
       rejected_ = true;
     }
   }
 
-  /// out_, quad_out_ = y(tout) on the last step, from its dense output.
+  /// out_, quad_out_ = y(tout) on the last step, from its dense output. False with the
+  /// step taken back when the model refuses one of the interpolant's extra stages.
   bool interpolate(double tout) {
     const int N = n_ + nq_;
     if (!dense_ready_) {
       for (int i = tab_.stages; i < tab_.dense_stages; ++i) {
         form_stage(y_old_, h_step_, i);
-        if (!eval(t_old_ + tab_.c[i] * h_step_, stage_, K_.col(i))) return false;
+        if (!eval(t_old_ + tab_.c[i] * h_step_, stage_, K_.col(i))) {
+          take_back_step();
+          return false;
+        }
       }
       Q_.noalias() = K_ * tab_.dense;
       dense_ready_ = true;
@@ -446,6 +473,21 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     return true;
   }
 
+  /// Undoes the last accepted step, whose dense output the model refused: a trial state of
+  /// it, like a refused stage (step()), so the step is retried ten times shorter. K_'s
+  /// first column still holds f at the step's start, which is the state again.
+  void take_back_step() {
+    y_.swap(y_old_);
+    t_ = t_old_;
+    h_ = h_step_ / kFailedStageShrink;
+    stage_failure_ = why_;
+    rejected_ = true;
+    have_step_ = false;
+    dense_ready_ = false;
+    k0_ = K0::Current;
+    --steps_;
+  }
+
   const OdeSystem& system_;
   const IntegratorOptions& options_;
   const detail::ButcherPair& tab_;
@@ -461,10 +503,15 @@ class RungeKuttaStepper final : public detail::PieceStepper {
   double t_ = 0.0, t_old_ = 0.0, stop_ = 0.0, piece_mid_ = 0.0;
   double h_ = 0.0;       ///< the next step to try (0: to be chosen)
   double h_step_ = 0.0;  ///< of the last accepted step, [t_old_, t_]
-  bool have_k0_ = false, have_step_ = false, dense_ready_ = false, rejected_ = false;
+  /// Where the next step's k_0 = f(t_, y_) comes from: evaluated, already in K_'s first
+  /// column, the last stage (FSAL), or k_next_ (evaluated before the step was accepted).
+  enum class K0 { Evaluate, Current, LastStage, Next };
+  K0 k0_ = K0::Evaluate;
+  Eigen::VectorXd k_next_;  ///< f at the new point of a pair without FSAL
+  bool have_step_ = false, dense_ready_ = false, rejected_ = false;
   long steps_ = 0, rhs_ = 0;
   std::string why_;
-  std::string stage_failure_;  ///< why the model refused a stage since the last accepted step
+  std::string stage_failure_;  ///< why the model refused the latest trial step (empty: it did not)
   double err_old_ = 1e-4;  ///< of the last accepted step (Hairer's facold)
 };
 

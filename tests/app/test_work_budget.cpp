@@ -89,7 +89,7 @@ TEST_CASE("a budget spent by an explicit pair in modal variables below atol 1e-1
   SimulationOptions& o = d.simulation->options;
   o.integrator.method = IntegratorOptions::Method::Dop853;
   o.full_variables = o.first_order_variables = SimulationOptions::Variables::Modal;
-  d.study_work = 2'000'000;  // a few thousand steps: spent within the first run either way
+  d.study_work = 2'000'000;  // a few thousand steps: spent by the error estimate's run at the latest
   o.integrator.atol = 1e-14;
   const RunResult low = run_quietly(d);
   CHECK(low.exit_code() == kExitNumericalFailure);

@@ -34,7 +34,8 @@ struct VariableChange {
 /// handed. `rhs` must not throw; it returns false to report a failure (the message is then
 /// taken from `last_error`, if set). CVODES ends the run at the first failure; the explicit
 /// pairs end it at a failure at an accepted state and reject a step one of whose trial
-/// stages fails (so `rhs` may be called again after returning false).
+/// states fails (its stages, its new point, its interpolant's stages: the step is retried
+/// shorter, so `rhs` may be called again after returning false).
 struct OdeSystem {
   int dim = 0;
   std::function<bool(const Instant&, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> xdot)>
