@@ -42,7 +42,7 @@ FullModel::Data FullModel::create_data() const {
   d.Mq.resize(body_.n());
   d.Kq.resize(body_.n());
   d.Dzd.resize(N);
-  d.split.resize(4 * body_.n() + 2 * N);  // the split sums of the run-time-size kernel
+  d.split.resize(2 * body_.n() + 2 * N);  // the split sums of the run-time-size kernel
   if (body_.geometric_stiffening()) {
     d.Hq.resize(body_.n());
     d.Hqd.resize(body_.n());
@@ -148,7 +148,7 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   double* Mq = NN > 0 ? Mq_local : d.Mq.data();
   double* Kq = NN > 0 ? Kq_local : d.Kq.data();
   // scratch of the split sums: on the stack for a fixed size, in the workspace otherwise
-  double split_local[kSplit && NN > 0 ? 4 * NN + 2 * ((NN + 3 + 3) / 4 * 4) : 1];
+  double split_local[kSplit && NN > 0 ? 2 * NN + 2 * ((NN + 3 + 3) / 4 * 4) : 1];  // M q's halves, then g's
   double* split = NN > 0 ? split_local : d.split.data();
   if constexpr (kSplit) {
     const int h = n / 2;
@@ -304,12 +304,15 @@ FREEFLEX_ALWAYS_INLINE bool full_rhs_kernel(const FlexibleBody& body, const Eige
   return true;
 }
 
+/// The sizes FullModel::rhs has a kernel of its own for (summing in sequential order).
+constexpr bool has_own_kernel(int n) { return n == 4 || n == 6 || n == 8 || n == 10; }
+
 }  // namespace
 
 bool detail::full_rhs_runtime_size(const FullModel& model, FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                                    const Eigen::Ref<const Eigen::VectorXd>& commands) {
   const int n = model.body().n();
-  if (n == 4 || n == 6 || n == 8 || n == 10)  // the sizes with a kernel of their own
+  if (has_own_kernel(n))
     return full_rhs_kernel<0>(model.body(), model.rest_inverse(), d, x, commands, n);
   return full_rhs_kernel<0, true>(model.body(), model.rest_inverse(), d, x, commands, n);
 }
@@ -325,12 +328,18 @@ namespace {
 // the right-hand side is bound by its arithmetic and runs 10-13% faster so
 // (docs/benchmarks.md); at the small sizes the chain of dependent operations binds it and
 // AVX2 did not pay (NOA 6: 2-3% slower), so those kernels stay as they are.
+FREEFLEX_ALWAYS_INLINE bool large_kernels(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse,
+                                          const Eigen::MatrixXd& rest_inverse_padded, FullModel::Data& d,
+                                          const Eigen::Ref<const Eigen::VectorXd>& x,
+                                          const Eigen::Ref<const Eigen::VectorXd>& commands) {
+  if (body.n() == 20) return full_rhs_kernel<20, true>(body, rest_inverse_padded, d, x, commands, 20);
+  return full_rhs_kernel<0, true>(body, rest_inverse, d, x, commands, body.n());
+}
 FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse,
                                    const Eigen::MatrixXd& rest_inverse_padded, FullModel::Data& d,
                                    const Eigen::Ref<const Eigen::VectorXd>& x,
                                    const Eigen::Ref<const Eigen::VectorXd>& commands) {
-  if (body.n() == 20) return full_rhs_kernel<20, true>(body, rest_inverse_padded, d, x, commands, 20);
-  return full_rhs_kernel<0, true>(body, rest_inverse, d, x, commands, body.n());
+  return large_kernels(body, rest_inverse, rest_inverse_padded, d, x, commands);
 }
 
 // And a third time with 512-bit vectors where the processor has AVX-512: half the vector
@@ -342,8 +351,7 @@ FREEFLEX_AVX2_CLONES bool large_rhs(const FlexibleBody& body, const Eigen::Matri
 __attribute__((target("avx512f,avx512vl,prefer-vector-width=512"))) bool large_rhs_512(
     const FlexibleBody& body, const Eigen::MatrixXd& rest_inverse, const Eigen::MatrixXd& rest_inverse_padded,
     FullModel::Data& d, const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& commands) {
-  if (body.n() == 20) return full_rhs_kernel<20, true>(body, rest_inverse_padded, d, x, commands, 20);
-  return full_rhs_kernel<0, true>(body, rest_inverse, d, x, commands, body.n());
+  return large_kernels(body, rest_inverse, rest_inverse_padded, d, x, commands);
 }
 #else
 #define FF_FULL_AVX512 0
@@ -378,12 +386,12 @@ bool FullModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
   // Eigen's dynamic-size kernels costs more than the arithmetic. The common sizes get a
   // kernel of their own (NOA 6, the paper's, took 1 516 instructions a call at run-time
   // size; docs/benchmarks.md).
+  if (!has_own_kernel(body_.n())) return detail::full_rhs_large(*this, d, x, commands, true);
   switch (body_.n()) {
     case 4: return full_rhs_kernel<4>(body_, rest_inverse_padded_, d, x, commands, 4);
     case 6: return full_rhs_kernel<6>(body_, rest_inverse_padded_, d, x, commands, 6);
     case 8: return full_rhs_kernel<8>(body_, rest_inverse_padded_, d, x, commands, 8);
-    case 10: return full_rhs_kernel<10>(body_, rest_inverse_padded_, d, x, commands, 10);
-    default: return detail::full_rhs_large(*this, d, x, commands, true);
+    default: return full_rhs_kernel<10>(body_, rest_inverse_padded_, d, x, commands, 10);
   }
 }
 

@@ -397,9 +397,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
         // A trial stage of too long a step can leave the model's range (the mass matrix of
         // the full model in modal variables, just after a restart) where the solution does
         // not: reject the step, as Hairer's codes do with a non-finite error.
-        stage_failure_ = why_;
-        h_ = h / kFailedStageShrink;
-        rejected_ = true;
+        reject_refused(h);
         continue;
       }
       // with FSAL the last stage was formed at y_n+1; else form it from b
@@ -412,9 +410,7 @@ class RungeKuttaStepper final : public detail::PieceStepper {
       // model refuses is a rejected step, not the end of the run (the value is the next
       // step's k_0, so this costs nothing; at a piece's end the next piece evaluates anew).
       if (err <= 1.0 && !tab_.fsal && !to_stop && !eval(t_ + h, stage_, k_next_)) {
-        stage_failure_ = why_;
-        h_ = h / kFailedStageShrink;
-        rejected_ = true;
+        reject_refused(h);
         continue;
       }
       if (err <= 1.0) {
@@ -473,15 +469,21 @@ class RungeKuttaStepper final : public detail::PieceStepper {
     return true;
   }
 
+  /// A step of length h one of whose trial states the model refused (why_ says why) is
+  /// rejected and the next trial is ten times shorter.
+  void reject_refused(double h) {
+    stage_failure_ = why_;
+    h_ = h / kFailedStageShrink;
+    rejected_ = true;
+  }
+
   /// Undoes the last accepted step, whose dense output the model refused: a trial state of
   /// it, like a refused stage (step()), so the step is retried ten times shorter. K_'s
   /// first column still holds f at the step's start, which is the state again.
   void take_back_step() {
     y_.swap(y_old_);
     t_ = t_old_;
-    h_ = h_step_ / kFailedStageShrink;
-    stage_failure_ = why_;
-    rejected_ = true;
+    reject_refused(h_step_);
     have_step_ = false;
     dense_ready_ = false;
     k0_ = K0::Current;
