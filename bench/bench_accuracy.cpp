@@ -71,6 +71,7 @@ struct Option {
   IntegratorOptions::Method method;
   SimulationOptions::Variables variables;
   std::vector<double> rtols;  ///< empty: 1e-6, 1e-8, 1e-10, 1e-12
+  bool taylor = false;        ///< the perturbation solution by Taylor series
 };
 
 double load_average() {
@@ -123,7 +124,8 @@ void table(int reps, const std::string& only, const std::vector<int>& noas) {
       const std::vector<double> rtols = op.rtols.empty() ? std::vector<double>{1e-6, 1e-8, 1e-10, 1e-12} : op.rtols;
       for (double rtol : rtols) {
         if (op.method == M::Bdf && rtol < 1e-10) continue;  // BDF at 1e-12: minutes
-        const SimulationOptions o = options(T, rtol, op.method, op.variables, g_atol_ratio);
+        SimulationOptions o = options(T, rtol, op.method, op.variables, g_atol_ratio);
+        if (op.taylor) o.first_order_solver = SimulationOptions::FirstOrderSolver::Taylor;
         SimulationResult r;
         double best = 1e300;
         for (int k = 0; k < reps; ++k) {
@@ -183,7 +185,8 @@ void sweep(int reps, const std::string& only, const std::vector<int>& noas, doub
       if (rtols.empty())
         for (int k = k_first; k <= k_last; k += 2) rtols.push_back(std::pow(10.0, -k / 8.0));
       for (double rtol : rtols) {
-        const SimulationOptions o = options(T, rtol, op.method, op.variables, g_atol_ratio);
+        SimulationOptions o = options(T, rtol, op.method, op.variables, g_atol_ratio);
+        if (op.taylor) o.first_order_solver = SimulationOptions::FirstOrderSolver::Taylor;
         SimulationResult r;
         double best = 1e300;
         for (int i = 0; i < reps; ++i) {
@@ -226,7 +229,8 @@ void perturbation_spans(int reps, const std::vector<int>& noas, double rtol) {
   const Option opts[] = {{"Adams, modal (default)", false, M::Adams, V::Modal, {}},
                          {"DOP853, modal", false, M::Dop853, V::Modal, {}},
                          {"Verner 9(8), modal", false, M::Verner98, V::Modal, {}},
-                         {"Adams, physical", false, M::Adams, V::Physical, {}}};
+                         {"Adams, physical", false, M::Adams, V::Physical, {}},
+                         {"Taylor", false, M::Adams, V::Modal, {}, true}};
   std::cout << "load average at start: " << load_average() << "\n\nrtol " << rtol << ", atol rtol/100\n\n";
   std::cout << "| NOA | method, variables | to [s] | RHS | steps | CPU [ms] | error θ at 3 s [rad] | error q |\n"
             << "| --- | --- | --- | --- | --- | --- | --- | --- |\n";
@@ -235,7 +239,8 @@ void perturbation_spans(int reps, const std::vector<int>& noas, double rtol) {
     const SimulationResult ref = simulate_perturbation(c.body, c.ex, options(3.0, 1e-13, M::Adams, V::Modal)).total;
     for (const Option& op : opts) {
       for (double T : {0.5, 1.0, 2.0, 3.0}) {
-        const SimulationOptions o = options(T, rtol, op.method, op.variables, g_atol_ratio);
+        SimulationOptions o = options(T, rtol, op.method, op.variables, g_atol_ratio);
+        if (op.taylor) o.first_order_solver = SimulationOptions::FirstOrderSolver::Taylor;
         SimulationResult r;
         double best = 1e300;
         for (int i = 0; i < reps; ++i) {

@@ -208,7 +208,13 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("integrator", &SimulationOptions::integrator)
       .def_readwrite("duration_s", &SimulationOptions::duration_s)
       .def_readwrite("output_step_s", &SimulationOptions::output_step_s)
-      .def_readwrite("trajectory_step_s", &SimulationOptions::trajectory_step_s);
+      .def_readwrite("trajectory_step_s", &SimulationOptions::trajectory_step_s)
+      .def_property(
+          "first_order_solver",
+          [](const SimulationOptions& o) { return std::string(to_string(o.first_order_solver)); },
+          [](SimulationOptions& o, const std::string& s) {
+            o.first_order_solver = enum_from<SimulationOptions::FirstOrderSolver>("first_order_solver", s);
+          });
   py::class_<TvlqrOptions>(m, "TvlqrOptions")
       .def(py::init<>())
       .def_readwrite("grid_step_s", &TvlqrOptions::grid_step_s)

@@ -276,6 +276,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
   r.loads_end_s = t_off;
   r.about_maneuver = static_cast<bool>(nominal);
   r.duration_s = options.duration_s;
+  r.first_order_solver = options.first_order_solver;
   r.prescribed_motion = static_cast<bool>(motion);
 
   const FullModel full(body);
@@ -617,6 +618,7 @@ Json to_json(const SimulationStudyResult& r) {
         run_stats(*r.comparison);
   if (r.perturbation) {
     Json j = run_stats(*r.perturbation);
+    j["first_order_solver"] = to_string(r.first_order_solver);
     j["zero_order_rhs_evaluations"] = r.perturbation->zero_order_rhs_evaluations;
     j["first_order_rhs_evaluations"] = r.perturbation->first_order_rhs_evaluations;
     if (r.perturbation->run.ok()) j["residual_vibration_energy_J"] = r.perturbation->residual_vibration_energy_J;

@@ -33,6 +33,13 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
       s.enumerated<SimulationOptions::Variables>("full_model_variables", false).value_or(o.full_variables);
   o.first_order_variables =
       s.enumerated<SimulationOptions::Variables>("first_order_variables", false).value_or(o.first_order_variables);
+  o.first_order_solver = s.enumerated<SimulationOptions::FirstOrderSolver>("first_order_solver", false)
+                             .value_or(o.first_order_solver);
+  if (o.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor && root.has("motion"))
+    s.problem("first_order_solver", s.key_path("first_order_solver") +
+                                        " = \"taylor\" integrates the perturbation solution about a free or optimized "
+                                        "motion; a prescribed [motion] is integrated by the `method` integrator: "
+                                        "remove the key or set it to \"integrator\"");
   st.nonlinear = s.boolean("nonlinear", false).value_or(st.nonlinear);
   st.perturbation = s.boolean("perturbation", false).value_or(st.perturbation);
   st.error_estimate = s.boolean("error_estimate", false).value_or(st.error_estimate);

@@ -11,6 +11,7 @@
 #include "dynamics/body_kernels.hpp"
 #include "model/commands.hpp"
 #include "util/format.hpp"
+#include "sim/ltv_taylor.hpp"
 #include "sim/modal_variables.hpp"
 #include "sim/range_check.hpp"
 #include "util/finite.hpp"
@@ -195,6 +196,49 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
   return r;
 }
 
+namespace {
+
+/// The first-order pass by Taylor series (sim/ltv_taylor.hpp).
+IntegrationResult taylor_first_order(
+    const FlexibleBody& body, const Excitation& excitation, const RigidTrajectory& nominal,
+    const SimulationResult& zero_order, const std::vector<double>& outs, const std::vector<double>& cuts,
+    const SimulationOptions& options,
+    const std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>&)>& range_check) {
+  // Sizes for the form's check: the nominal motion's largest rate and accelerations.
+  double rate = 0.0, accel = 0.0, command = 0.0;
+  Eigen::VectorXd u(static_cast<Eigen::Index>(body.elements().size()));
+  for (Eigen::Index i = 0; i < zero_order.t.size(); ++i) {
+    const Instant at = Instant::at(zero_order.t(i));
+    const RigidState s = nominal.at(at);
+    rate = std::max(rate, std::abs(s.vel(2)));
+    accel = std::max(accel, s.acc.cwiseAbs().maxCoeff());
+    detail::evaluate_commands(excitation, at, u);
+    if (u.size()) command = std::max(command, u.cwiseAbs().maxCoeff());
+  }
+  const detail::LtvForm form = detail::ltv_form(body, rate, accel, command);
+  if (!form.unsupported.empty()) {
+    IntegrationResult r;
+    r.status = IntegrationStatus::Failed;
+    r.message = "first_order_solver = taylor: " + form.unsupported;
+    r.failure_time = outs.front();
+    return r;
+  }
+  detail::LtvCoefficients c;
+  c.nominal = &nominal;
+  c.scale.setOnes(6 + 3 * u.size());
+  c.scale(1) = std::max(rate, 1e-300);
+  c.scale(2) = std::max(rate * rate, 1e-300);
+  c.scale.segment(3, 3).setConstant(std::max(accel, 1e-300));
+  c.scale.tail(3 * u.size()).setConstant(std::max(command, 1e-300));
+  c.commands = [&excitation](const Instant& at, Eigen::Ref<Eigen::VectorXd> v) {
+    detail::evaluate_commands(excitation, at, v);
+  };
+  const int order = 50;  // docs/benchmarks.md: fewest terms at NOA 20 and rtol 1e-8 (30-80 tried)
+  return detail::integrate_ltv_taylor(form, c, outs, cuts, options.integrator, order, range_check);
+}
+
+}  // namespace
+
 PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitation& excitation,
                                          const SimulationOptions& options) {
   const auto t_start = Clock::now();
@@ -327,8 +371,13 @@ PerturbationResult simulate_perturbation_about(const FlexibleBody& body, const E
   };
   fsys.last_error = [] { return std::string("the first-order right-hand side is not finite"); };
   fsys.range_check = detail::deflection_check(body, options, 3);
-  const auto modal = use_variables(options.first_order_variables, body, fsys, cached);
-  const IntegrationResult fr = integrate(fsys, Eigen::VectorXd::Zero(2 * N), outs, cuts, options.integrator);
+  IntegrationResult fr;
+  if (options.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor) {
+    fr = taylor_first_order(body, excitation, *nominal, out.zero_order, outs, cuts, options, fsys.range_check);
+  } else {
+    const auto modal = use_variables(options.first_order_variables, body, fsys, cached);
+    fr = integrate(fsys, Eigen::VectorXd::Zero(2 * N), outs, cuts, options.integrator);
+  }
   out.first_order_rhs_evaluations = fr.rhs_evaluations;
   SimulationResult& tot = out.total;
   tot.status = fr.status;

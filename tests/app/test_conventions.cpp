@@ -143,6 +143,10 @@ TEST_CASE("enum names are the spellings design files take", "[api][io]") {
     CHECK(d.simulation->options.full_variables == value);
     CHECK(d.simulation->options.first_order_variables == value);
   }
+  for (const auto& [value, name] : EnumNames<SimulationOptions::FirstOrderSolver>::names) {
+    const Design d = parse_design(kBeam + simulation + "first_order_solver = \"" + name + "\"\n", "t.toml");
+    CHECK(d.simulation->options.first_order_solver == value);
+  }
 }
 
 TEST_CASE("summary.json spells enum values as design files do", "[api][io]") {

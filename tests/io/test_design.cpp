@@ -112,6 +112,17 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
   CHECK_FALSE(swapped.simulation->error_estimate);
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nerror_estimate = 1\n"),
              Contains("error_estimate"));
+  // the first-order solver: the integrator unless asked; "taylor" not with a prescribed motion
+  CHECK(d.simulation->options.first_order_solver == SimulationOptions::FirstOrderSolver::Integrator);
+  const Design taylor = parse_design(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nfirst_order_solver = \"taylor\"\n",
+                                     "t.toml");
+  CHECK(taylor.simulation->options.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor);
+  const std::string bad = problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nfirst_order_solver = \"euler\"\n");
+  CHECK_THAT(bad, Contains("first_order_solver") && Contains("integrator") && Contains("taylor") && Contains("line"));
+  const std::string prescribed =
+      problems_of(kPaperBeam + "[motion.theta]\ntype = \"spin_up\"\nfinal_rate_deg_s = 180.0\nramp_time_s = 2.0\n"
+                               "[simulation]\nduration_s = 1.0\nfirst_order_solver = \"taylor\"\n");
+  CHECK_THAT(prescribed, Contains("first_order_solver") && Contains("prescribed [motion]"));
 }
 
 TEST_CASE("bad loads and tolerances name key and line", "[io]") {

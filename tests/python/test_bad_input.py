@@ -128,3 +128,24 @@ def test_bad_maneuver_and_law_inputs_raise():
     assert np.abs(gauss.z_dot - cv.z_dot).max() <= 1e-9 * scale
     with pytest.raises(ValueError):
         law.gain(math.nan)
+
+
+def test_taylor_first_order_solver_by_name():
+    """The perturbation solution by Taylor series, chosen by name as in a design file;
+    it agrees with the integrator's and a wrong name is refused naming the key."""
+    b = ff.Body(1.0, 1.0, 1.0, 6, [ff.ForceElement("Mz", "torque", 0.5)])
+    loads = ff.Excitation([ff.TimeProfile("steps", [0.0, 0.5, 1.0], [1.0, -1.0])])
+    o = ff.SimulationOptions()
+    o.duration_s = 2.0
+    o.integrator.rtol = 1e-10
+    o.integrator.atol = 1e-12
+    assert o.first_order_solver == "integrator"
+    ref = ff.simulate_perturbation(b, loads, o)
+    o.first_order_solver = "taylor"
+    assert o.first_order_solver == "taylor"
+    got = ff.simulate_perturbation(b, loads, o)
+    assert got.total.ok and ref.total.ok
+    # both are within ~1e-9 of the exact solution at rtol 1e-10 (tests/sim/test_ltv_taylor.cpp)
+    assert np.max(np.abs(got.total.z - ref.total.z)) < 1e-8
+    with pytest.raises(ValueError, match="first_order_solver"):
+        o.first_order_solver = "rk4"

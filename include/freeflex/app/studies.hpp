@@ -121,6 +121,8 @@ struct SimulationStudyResult {
 
   double loads_end_s = 0.0;      ///< no load acts after it
   bool about_maneuver = false;   ///< the nominal is the optimized maneuver (else the zero-order simulation)
+  /// How the perturbation solution's first-order model was integrated.
+  SimulationOptions::FirstOrderSolver first_order_solver = SimulationOptions::FirstOrderSolver::Integrator;
   double duration_s = 0.0;
   /// A solution, its table (nonlinear.csv or perturbation.csv) and its figures of merit.
   struct Solution {

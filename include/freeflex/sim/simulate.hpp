@@ -29,6 +29,14 @@ struct SimulationOptions {
   enum class Variables { Physical, Modal };
   Variables full_variables = Variables::Physical;      ///< of the full nonlinear model
   Variables first_order_variables = Variables::Modal;  ///< of the first-order model
+  /// How the perturbation solution's first-order model is integrated: by `integrator`
+  /// in `first_order_variables`, or by Taylor series of the linear model in body
+  /// coordinates with exact exponentials where its coefficients are constant (docs/theory.md
+  /// section 8; much faster at many functions, for models whose coefficients are linear in
+  /// the nominal rate squared, accelerations and commands; others fail with the reason).
+  /// `integrator.rtol` and `atol` set the Taylor steps too.
+  enum class FirstOrderSolver { Integrator, Taylor };
+  FirstOrderSolver first_order_solver = FirstOrderSolver::Integrator;
   /// A run ends with status out_of_range when the elastic deflection |u(x)| somewhere on
   /// the beam exceeds this fraction of the beam's length (an inextensible beam cannot bend
   /// further than its length: the response has grown without bound). Checked at output times.
@@ -124,6 +132,14 @@ struct EnumNames<SimulationOptions::Variables> {
   static constexpr const char* what = "integration variables";
   static constexpr std::array<std::pair<SimulationOptions::Variables, const char*>, 2> names{
       {{SimulationOptions::Variables::Physical, "physical"}, {SimulationOptions::Variables::Modal, "modal"}}};
+};
+
+template <>
+struct EnumNames<SimulationOptions::FirstOrderSolver> {
+  static constexpr const char* what = "first-order solver";
+  static constexpr std::array<std::pair<SimulationOptions::FirstOrderSolver, const char*>, 2> names{
+      {{SimulationOptions::FirstOrderSolver::Integrator, "integrator"},
+       {SimulationOptions::FirstOrderSolver::Taylor, "taylor"}}};
 };
 
 }  // namespace freeflex
