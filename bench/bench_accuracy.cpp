@@ -97,7 +97,8 @@ void table(int reps, const std::string& only, const std::vector<int>& noas) {
                          {"perturbation, Adams, modal (default)", false, M::Adams, V::Modal, {}},
                          {"perturbation, Adams, physical", false, M::Adams, V::Physical, {}},
                          {"perturbation, DOP853, modal", false, M::Dop853, V::Modal, {1e-6, 1e-8, 1e-10}},
-                         {"perturbation, DOP853, physical", false, M::Dop853, V::Physical, {1e-6, 1e-8, 1e-10}}};
+                         {"perturbation, DOP853, physical", false, M::Dop853, V::Physical, {1e-6, 1e-8, 1e-10}},
+                         {"perturbation, Taylor", false, M::Adams, V::Modal, {}, true}};
   std::cout << "load average at start: " << load_average() << "\n\n";
   std::cout << "| NOA | model, method, variables | rtol | error θ [rad] | estimate θ | ratio | error q | estimate q "
                "| ratio | CPU [ms] | steps | RHS |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- "

@@ -86,6 +86,12 @@ RigidState SampledRigidTrajectory::at(const Instant& when) const {
   return r;
 }
 
+std::vector<double> SampledRigidTrajectory::knots() const {
+  std::vector<double> k;
+  for (const Piece& p : pieces_) k.insert(k.end(), p.t.begin(), p.t.end());
+  return k;
+}
+
 RigidState ExtendedTrajectory::at(const Instant& when) const {
   const double end = inner_->t_end();
   if (when.piece_mid <= end && when.t <= end) return inner_->at(when);

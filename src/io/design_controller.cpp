@@ -135,8 +135,7 @@ void read_controller(Section& root, Design& d, Outputs& outputs, const std::vect
     const double t_end = st.simulate_until_s;
     const bool from_simulation = d.simulation.has_value();
     const double out_step = from_simulation ? d.simulation->options.output_step_s : 0.005;
-    const double traj_step =
-        from_simulation ? d.simulation->options.trajectory_step_s : SimulationOptions{}.trajectory_step_s;
+    const double traj_step = trajectory_step(from_simulation ? d.simulation->options : SimulationOptions{});
     const std::string out_text =
         from_simulation ? "simulation.output_step_s" : "the fixed output step (no [simulation])";
     if (until && horizon && !d.maneuver && t_end < st.horizon_s)

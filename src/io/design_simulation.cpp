@@ -51,14 +51,15 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
                                                   {"integrator.max_step", "max_step_s"}});
   // the perturbation solution samples the zero-order motion at the finer of the two steps
   // (the output rows are bounded above)
+  const double samples_step = trajectory_step(o);
   if (st.perturbation && !root.has("maneuver") && dur && (step || !s.has("output_step_s")) &&
-      (traj || !s.has("trajectory_step_s")) && o.trajectory_step_s < o.output_step_s)
+      (traj || !s.has("trajectory_step_s")) && samples_step < o.output_step_s)
     check_count(s, traj ? "trajectory_step_s" : "duration_s",
                 traj ? s.key_path("trajectory_step_s") + " = " + shortest(o.trajectory_step_s)
                      : s.key_path("duration_s") + " = " + shortest(*dur),
                 traj ? "duration_s = " + shortest(*dur)
-                     : "trajectory_step_s = " + shortest(o.trajectory_step_s) + " (the default)",
-                *dur, o.trajectory_step_s, "samples of the zero-order motion", lim::kMaxTrajectorySamples,
+                     : "trajectory_step_s = " + shortest(samples_step) + " (the default)",
+                *dur, samples_step, "samples of the zero-order motion", lim::kMaxTrajectorySamples,
                 "raise trajectory_step_s or shorten duration_s");
   if (!st.nonlinear && !st.perturbation)
     s.problem("nonlinear", s.key_path("nonlinear") + " and perturbation are both false: nothing to simulate");

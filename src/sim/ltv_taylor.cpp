@@ -22,6 +22,8 @@ constexpr double kLocalError = 1e-3;
 /// 2π): the series' largest terms, e^(h‖A‖) / sqrt(2π h‖A‖) times the state, then cost at
 /// most five digits to cancellation.
 constexpr double kMaxStepNorm = 16.0;
+/// Fewest terms of a step (a step's last two terms can vanish by symmetry before).
+constexpr int kMinOrder = 8;
 constexpr int kFixed = 6;  // 1, θ0', θ0'², θ0'', a_x, a_y; then u, u cos θ0, u sin θ0 of each command
 
 /// A nominal motion frozen at one state (for evaluating the model at chosen θ0', θ0'', R0'').
@@ -291,6 +293,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
                                            range_check) {
   const int n = form.n, N = form.N, nb = static_cast<int>(form.A.size());
   const int m = (nb - kFixed) / 3;
+  validate(options);
   const int K = order;
   IntegrationResult r;
   const int T = static_cast<int>(outs.size());
@@ -311,9 +314,12 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
   // interpolant gives wander by ~1e-12 of their size.
   auto negligible = [&](int i) { return std::max(1e-2 * options.rtol, 1e-11) * coefficients.scale(i); };
   Eigen::VectorXd y = Eigen::VectorXd::Zero(n), c(nb), u(m), xb(n);
+  std::vector<double> knots = coefficients.nominal->knots();
+  std::sort(knots.begin(), knots.end());
   int next_out = 0;
   double theta0 = 0.0;
   long long per_term = step_work(n, IntegratorOptions::Method::Adams);
+  long steps_since_output = 0;  // for max_steps
   // The state at an output time, back in inertial coordinates.
   auto record = [&](double t, double mid) -> bool {
     const Instant at{t, mid};
@@ -339,6 +345,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
       }
     }
     if (options.progress) options.progress(t);
+    steps_since_output = 0;
     return true;
   };
   auto finish = [&]() {
@@ -347,6 +354,36 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
     return r;
   };
   if (!record(t0, t0)) return finish();
+  auto fail_at = [&](double t, const std::string& why) {
+    r.status = IntegrationStatus::Failed;
+    r.message = why + " at t = " + util::format_number(t, 6) + " s";
+    r.failure_time = t;
+    return finish();
+  };
+  // The step budgets: max_total_steps and the study's budget, charged `terms` products
+  // (a Taylor step its terms, an exponential exp_cost); false when spent.
+  const long exp_cost = 10L * n;  // about the products of one exponential (Padé, squarings)
+  auto charge = [&](long terms, double t) {
+    ++steps_since_output;
+    if (options.max_total_steps > 0 && r.steps >= options.max_total_steps) {
+      fail_at(t, "stopped: the integration's step budget, max_total_steps = " + std::to_string(options.max_total_steps) +
+                     ", is spent");
+      return false;
+    }
+    if (steps_since_output > options.max_steps) {
+      fail_at(t, "stopped: more than max_steps = " + std::to_string(options.max_steps) + " steps between two outputs");
+      return false;
+    }
+    if (options.budget) {
+      if (options.budget->steps_left(per_term * terms) < 1) {
+        options.budget->mark_exhausted();
+        fail_at(t, "stopped: " + options.budget->spent_message());
+        return false;
+      }
+      options.budget->charge(per_term * terms);
+    }
+    return true;
+  };
 
   // Chebyshev nodes on [0, 1]: values there → Chebyshev coefficients (well conditioned,
   // so a polynomial of low degree shows as one: its higher coefficients are round-off)
@@ -396,23 +433,36 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
   Eigen::MatrixXd G(n, kFit);  // Σ_i c_ij g_i
   Eigen::VectorXd acc(n), v(n);
   const double norm_A0 = form.A[0].cwiseAbs().rowwise().sum().maxCoeff();
+  const double h_max = kMaxStepNorm / std::max(norm_A0, 1e-300);
+  // atol in y: an error e in y_i moves x by at most e times the largest entry of S's
+  // column i (as the modal variables scale atol)
+  const Eigen::ArrayXd atol_y = options.atol / form.S.cwiseAbs().colwise().maxCoeff().array().transpose();
 
   for (std::size_t p = 0; p + 1 < edges.size(); ++p) {
     const double a = edges[p], b = edges[p + 1], mid = 0.5 * (a + b);
-    // Constant piece? Then exact exponentials of [[A, g], [0, 0]].
-    Eigen::MatrixXd cs(7, nb);
-    for (int k = 0; k < 7; ++k) {
+    // Constant piece? Then exact exponentials of [[A, g], [0, 0]]. Sampled at both ends
+    // and at 15 points spaced by the golden ratio (equal spacing can alias a rotation:
+    // whole turns between samples); and a piece that turns (θ0' not negligible) is not
+    // constant when a function that turns with it (a, u cos θ0, u sin θ0) is not zero.
+    constexpr int kProbe = 17;
+    Eigen::MatrixXd cs(kProbe, nb);
+    for (int k = 0; k < kProbe; ++k) {
+      const double f = k == 0 ? 0.0 : k == 1 ? 1.0 : std::fmod(0.5 + 0.6180339887498949 * k, 1.0);
       Eigen::VectorXd ck(nb);
-      coefficients.at(Instant{a + (b - a) * k / 6.0, mid}, ck, theta0, u);
+      coefficients.at(Instant{a + (b - a) * f, mid}, ck, theta0, u);
       cs.row(k) = ck.transpose();
     }
     bool constant = true;
     for (int i = 0; i < nb && constant; ++i)
       constant = cs.col(i).maxCoeff() - cs.col(i).minCoeff() <= negligible(i);
+    const bool turning = cs.col(1).cwiseAbs().maxCoeff() > negligible(1);
+    for (int i = 4; i < nb && constant && turning; ++i)
+      if (i == 4 || i == 5 || (i >= kFixed && (i - kFixed) % 3 != 0))
+        constant = cs.col(i).cwiseAbs().maxCoeff() <= negligible(i);
     double t = a;
     if (constant) {
       Eigen::MatrixXd At = Eigen::MatrixXd::Zero(n + 1, n + 1);
-      const Eigen::VectorXd cm = cs.row(3).transpose();
+      const Eigen::VectorXd cm = cs.row(2).transpose();  // at a + 0.118 (b - a)
       for (int i = 0; i < nb; ++i) {
         if (form.A[i].size()) At.topLeftCorner(n, n) += cm(i) * form.A[i];
         if (form.g[i].size()) At.topRightCorner(n, 1) += cm(i) * form.g[i];
@@ -429,10 +479,12 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
         if (!(std::abs(d - cached) <= 1e-12 * cached)) {
           E = (At * d).exp();
           cached = d;
-          r.rhs_evaluations += 1;
+          r.rhs_evaluations += exp_cost;
+          if (!charge(exp_cost, t)) return finish();
         }
         ya << y, 1.0;
         y = E.topRows(n) * ya;
+        if (!y.allFinite()) return fail_at(t, "the exponential of the piece's constant model is not finite");
         ++r.steps;
         t = target;
         if (next_out < T && outs[next_out] == t && !record(t, mid)) return finish();
@@ -442,23 +494,46 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
     }
     // Taylor steps: the coefficient functions fitted on each step, the terms by the
     // recurrence (k+1) X_{k+1} = H [Σ_i A_i Σ_j c_ij X_{k-j} + Σ_i c_ik g_i].
-    const double h_max = kMaxStepNorm / std::max(norm_A0, 1e-300);
-    double H = std::min(b - a, 4.0 / std::max(norm_A0, 1e-300));
+    const double h_limit = options.max_step > 0.0 ? std::min(options.max_step, h_max) : h_max;
+    double h_want = 4.0 / std::max(norm_A0, 1e-300);  // the step the error test asks for
+    // the nominal's knots inside the piece: a step ends at the next one (a fit across a
+    // jump of the third derivative drifts: 3e-9 rad in θ over 3 s at NOA 6)
+    auto knot = std::upper_bound(knots.begin(), knots.end(), a);
+    double tail_before = std::numeric_limits<double>::infinity(), tail_H = tail_before;  // the fit check's last refusal
     while (t < b) {
-      H = std::min(H, h_max);
-      if (b - t < 1.25 * H) H = b - t;
-      if (!(H > 4.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(t), 1.0))) {
-        r.status = IntegrationStatus::Failed;
-        r.message = "Taylor steps fell to round-off at t = " + util::format_number(t, 6) + " s";
-        r.failure_time = t;
-        return finish();
-      }
+      h_want = std::min(h_want, h_limit);
+      while (knot != knots.end() && *knot <= t) ++knot;
+      const double stop = knot != knots.end() && *knot < b ? *knot : b;
+      // to the stop in one step when it is at most a quarter further than wanted (and
+      // within max_step), else in two equal ones when one wanted step would leave a
+      // sliver before it
+      const double d = stop - t;
+      const double H = d < 1.25 * h_want ? (d <= h_limit * (1.0 + 1e-9) ? d : 0.5 * d) : h_want;
+      if (!(H > 4.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(t), 1.0)))
+        return fail_at(t, "Taylor steps fell to round-off (the coefficient functions or the terms cannot be resolved)");
       for (int l = 0; l < kFit; ++l) {
         Eigen::VectorXd cl(nb);
         coefficients.at(Instant{t + nodes(l) * H, mid}, cl, theta0, u);
         samples.row(l) = cl.transpose();
       }
       chebc.noalias() = cheb * samples;
+      if (!chebc.allFinite()) return fail_at(t, "the nominal motion or the commands are not finite");
+      // The fit must resolve every function on the step: its last two Chebyshev
+      // coefficients negligible, else a shorter step; unless halving the step did not
+      // shrink them (a smooth function's fall 2^9 times): then they are the noise of the
+      // nominal itself (its interpolated accelerations carry the round-off of positions
+      // over h², ~1e-10 of θ0'' after some turns), which no step resolves.
+      double worst_tail = 0.0;
+      for (int i = 0; i < nb; ++i)
+        worst_tail = std::max(worst_tail, (std::abs(chebc(kFit - 1, i)) + std::abs(chebc(kFit - 2, i))) / negligible(i));
+      if (worst_tail > 1.0 && !(H < 0.75 * tail_H && worst_tail > 0.1 * tail_before)) {
+        tail_before = worst_tail;
+        tail_H = H;
+        h_want = 0.5 * H;
+        continue;
+      }
+      tail_before = std::numeric_limits<double>::infinity();
+      tail_H = std::numeric_limits<double>::infinity();
       for (int i = 0; i < nb; ++i) {
         const double big = chebc.col(i).cwiseAbs().maxCoeff();
         int d = kFit - 1;
@@ -487,7 +562,11 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
         for (int j = 0; j <= degree[i]; ++j) G.col(j) += coef(j, i) * form.g[i];
         Dg = std::max(Dg, degree[i]);
       }
+      // Terms until the last two are small enough for the whole step (at most K).
+      Eigen::VectorXd weight = ((options.atol + options.rtol * y.array().abs()).inverse()).matrix();
+      auto size_of = [&](int j) { return X.col(j).cwiseAbs().cwiseProduct(weight).maxCoeff(); };
       X.col(0) = y;
+      int p = K;  // the order used
       for (int k = 0; k < K; ++k) {
         if (k <= Dg)
           acc = G.col(k);
@@ -501,54 +580,45 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
           term[i].multiply_add(v.data(), acc.data());
         }
         X.col(k + 1) = (H / (k + 1)) * acc;
+        if (k + 1 >= kMinOrder && k + 1 > Dg && size_of(k) <= kLocalError && size_of(k + 1) <= kLocalError) {
+          p = k + 1;
+          break;
+        }
       }
-      r.rhs_evaluations += K;
+      r.rhs_evaluations += p;
+      if (!X.leftCols(p + 1).allFinite()) return fail_at(t, "the Taylor series of the first-order model is not finite");
+      if (!charge(p, t)) return finish();
       // Step: the last two terms at σ meet the tolerances (weights from the step's start).
       double sigma = std::numeric_limits<double>::infinity();
-      for (int j : {K - 1, K}) {
-        double e = 0.0;
-        for (int i = 0; i < n; ++i)
-          e = std::max(e, std::abs(X(i, j)) / (options.atol + options.rtol * std::abs(y(i))));
+      for (int j : {p - 1, p}) {
+        const double e = size_of(j);
         if (e > 0.0) sigma = std::min(sigma, std::pow(kLocalError / e, 1.0 / j));
       }
-      sigma *= 0.9;
+      if (p == K) sigma *= 0.9;
       const double step = std::min(sigma, 1.0);
-      const bool to_end = step >= 1.0 && H == b - t;
-      const double t_new = to_end ? b : (step >= 1.0 ? t + H : t + step * H);
+      const bool to_stop = step >= 1.0 && H == stop - t;
+      const double t_new = to_stop ? stop : (step >= 1.0 ? t + H : t + step * H);
       // Outputs within the step, by Horner's rule.
       while (next_out < T && outs[next_out] <= t_new && outs[next_out] <= b) {
         const double s = (outs[next_out] - t) / H;
-        Eigen::VectorXd ys = X.col(K);
-        for (int k = K - 1; k >= 0; --k) ys = ys * s + X.col(k);
+        Eigen::VectorXd ys = X.col(p);
+        for (int k = p - 1; k >= 0; --k) ys = ys * s + X.col(k);
         const Eigen::VectorXd keep = y;
         y = ys;
         const bool ok = record(outs[next_out], mid);
         y = keep;
         if (!ok) return finish();
       }
-      Eigen::VectorXd yn = X.col(K);  // Horner
-      for (int k = K - 1; k >= 0; --k) yn = yn * step + X.col(k);
+      Eigen::VectorXd yn = X.col(p);  // Horner
+      for (int k = p - 1; k >= 0; --k) yn = yn * step + X.col(k);
       y = yn;
       t = t_new;
       ++r.steps;
-      if (options.max_total_steps > 0 && r.steps > options.max_total_steps) {
-        r.status = IntegrationStatus::Failed;
-        r.message = "stopped at t = " + util::format_number(t, 6) + " s: the integration's step budget, max_total_steps = " +
-                    std::to_string(options.max_total_steps) + ", is spent";
-        r.failure_time = t;
-        return finish();
-      }
-      if (options.budget) {
-        if (options.budget->steps_left(per_term * K) < 1) {
-          options.budget->mark_exhausted();
-          r.status = IntegrationStatus::Failed;
-          r.message = "stopped at t = " + util::format_number(t, 6) + " s: " + options.budget->spent_message();
-          r.failure_time = t;
-          return finish();
-        }
-        options.budget->charge(per_term * K);
-      }
-      H = step >= 1.0 ? H * std::min(sigma, 2.0) : step * H;
+      // a step cut short by a knot or the piece's end says nothing against the longer one
+      if (step < 1.0)
+        h_want = step * H;
+      else if (!(to_stop && H < h_want))
+        h_want = H * std::min(sigma, 2.0);
     }
   }
   r.status = IntegrationStatus::Completed;

@@ -52,6 +52,7 @@ class LastStateCache : public RigidTrajectory {
   double t_begin() const override { return inner_->t_begin(); }
   double t_end() const override { return inner_->t_end(); }
   std::vector<double> breakpoints() const override { return inner_->breakpoints(); }
+  std::vector<double> knots() const override { return inner_->knots(); }
 
  private:
   std::shared_ptr<const RigidTrajectory> inner_;
@@ -112,8 +113,9 @@ std::vector<FieldProblem> problems(const SimulationOptions& o) {
   else if (!(o.output_step_s <= o.duration_s))
     p.push_back({"output_step_s", "output_step_s = " + num(o.output_step_s) + " exceeds duration_s = " +
                                       num(o.duration_s) + ", expected output_step_s <= duration_s"});
-  if (!(o.trajectory_step_s > 0.0))
-    p.push_back({"trajectory_step_s", "trajectory_step_s = " + num(o.trajectory_step_s) + ", expected > 0"});
+  if (!(o.trajectory_step_s >= 0.0) || !std::isfinite(o.trajectory_step_s))
+    p.push_back({"trajectory_step_s", "trajectory_step_s = " + num(o.trajectory_step_s) +
+                                          ", expected a finite value > 0, or 0 for the automatic step"});
   if (!(o.max_deflection_ratio > 0.0))
     p.push_back({"max_deflection_ratio", "max_deflection_ratio = " + num(o.max_deflection_ratio) + ", expected > 0"});
   for (const FieldProblem& q : problems(o.integrator)) p.push_back({"integrator." + q.field, "integrator." + q.message});
@@ -129,6 +131,11 @@ std::vector<double> output_times(const SimulationOptions& o) {
   for (long i = 0; i < steps; ++i) t.push_back(i * o.output_step_s);
   t.push_back(o.duration_s);
   return t;
+}
+
+double trajectory_step(const SimulationOptions& o) {
+  const double automatic = o.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor ? 5e-3 : 1e-3;
+  return std::min(o.trajectory_step_s > 0.0 ? o.trajectory_step_s : automatic, o.output_step_s);
 }
 
 SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excitation, const SimulationOptions& options,
@@ -252,7 +259,7 @@ PerturbationResult simulate_perturbation(const FlexibleBody& body, const Excitat
   std::vector<double> edges{0.0};
   edges.insert(edges.end(), cuts.begin(), cuts.end());
   edges.push_back(options.duration_s);
-  const double h = std::min(options.trajectory_step_s, options.output_step_s);
+  const double h = trajectory_step(options);
   std::vector<double> nodes;
   std::vector<std::size_t> piece_first;  // index in nodes of each piece's first node
   for (std::size_t p = 0; p + 1 < edges.size(); ++p) {

@@ -45,6 +45,10 @@ class RigidTrajectory {
   virtual double t_end() const = 0;
   /// Times where the acceleration may jump (pieces of the timeline).
   virtual std::vector<double> breakpoints() const = 0;
+  /// Times inside the pieces where the motion's higher derivatives jump (the nodes of a
+  /// piecewise interpolant; empty when it is smooth there). The Taylor series of the
+  /// perturbation solution do not step across one (docs/theory.md section 8).
+  virtual std::vector<double> knots() const { return {}; }
 };
 
 /// Samples (t, pos, vel, acc) on each smooth piece, interpolated by quintic Hermite
@@ -62,6 +66,8 @@ class SampledRigidTrajectory : public RigidTrajectory {
   double t_begin() const override { return pieces_.front().t.front(); }
   double t_end() const override { return pieces_.back().t.back(); }
   std::vector<double> breakpoints() const override;
+  /// Every sample time: the interpolant's third derivative jumps there.
+  std::vector<double> knots() const override;
 
  private:
   std::vector<Piece> pieces_;
@@ -77,6 +83,7 @@ class ExtendedTrajectory : public RigidTrajectory {
   double t_begin() const override { return inner_->t_begin(); }
   double t_end() const override { return t_end_; }
   std::vector<double> breakpoints() const override;
+  std::vector<double> knots() const override { return inner_->knots(); }
 
  private:
   std::shared_ptr<const RigidTrajectory> inner_;
