@@ -3,7 +3,7 @@
 // beam, 0-1 s), NOA 6 over 0-3 s and NOA 20 over 0-1 s, output every 10 ms. For each
 // integration option and rtol 1e-6 ... 1e-12 (atol = rtol / 100): the error in θ and q
 // against a tight reference of the same model (max over the output times), the global
-// error estimate freeflex reports (a second run at rtol/100, GlobalErrorEstimate), their
+// error estimate freeflex reports (a second run at rtol/10, GlobalErrorEstimate), their
 // ratio, CPU time (minimum of `reps` runs) and steps. Prints a Markdown table.
 //
 //   build/bench/bench_accuracy [reps] [--only TEXT] [--noa N]...   the table (rows whose

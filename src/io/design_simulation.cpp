@@ -35,6 +35,11 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
       s.enumerated<SimulationOptions::Variables>("first_order_variables", false).value_or(o.first_order_variables);
   o.first_order_solver = s.enumerated<SimulationOptions::FirstOrderSolver>("first_order_solver", false)
                              .value_or(o.first_order_solver);
+  if (o.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor && o.integrator.rtol < 1e-10)
+    s.problem("rtol", s.key_path("rtol") + " = " + shortest(o.integrator.rtol) +
+                          " with first_order_solver = \"taylor\": expected >= 1e-10 (it takes the nominal motion's "
+                          "coefficients to 1e-11 of their size, the sampled motion's own accuracy, so a tighter rtol "
+                          "would not be met and its error estimate would not show it; docs/theory.md section 8)");
   if (o.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor && root.has("motion"))
     s.problem("first_order_solver", s.key_path("first_order_solver") +
                                         " = \"taylor\" integrates the perturbation solution about a free or optimized "

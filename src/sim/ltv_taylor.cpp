@@ -500,6 +500,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
     // jump of the third derivative drifts: 3e-9 rad in θ over 3 s at NOA 6)
     auto knot = std::upper_bound(knots.begin(), knots.end(), a);
     double tail_before = std::numeric_limits<double>::infinity(), tail_H = tail_before;  // the fit check's last refusal
+    double noise_tail = 0.0;  // the tails (over negligible) found to be the nominal's noise in this piece
     while (t < b) {
       h_want = std::min(h_want, h_limit);
       while (knot != knots.end() && *knot <= t) ++knot;
@@ -526,11 +527,14 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
       double worst_tail = 0.0;
       for (int i = 0; i < nb; ++i)
         worst_tail = std::max(worst_tail, (std::abs(chebc(kFit - 1, i)) + std::abs(chebc(kFit - 2, i))) / negligible(i));
-      if (worst_tail > 1.0 && !(H < 0.75 * tail_H && worst_tail > 0.1 * tail_before)) {
-        tail_before = worst_tail;
-        tail_H = H;
-        h_want = 0.5 * H;
-        continue;
+      if (worst_tail > std::max(1.0, noise_tail)) {
+        if (!(H < 0.75 * tail_H && worst_tail > 0.1 * tail_before)) {
+          tail_before = worst_tail;
+          tail_H = H;
+          h_want = 0.5 * H;
+          continue;
+        }
+        noise_tail = 4.0 * worst_tail;  // the piece's noise: later steps need not retry it
       }
       tail_before = std::numeric_limits<double>::infinity();
       tail_H = std::numeric_limits<double>::infinity();

@@ -123,6 +123,8 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
       problems_of(kPaperBeam + "[motion.theta]\ntype = \"spin_up\"\nfinal_rate_deg_s = 180.0\nramp_time_s = 2.0\n"
                                "[simulation]\nduration_s = 1.0\nfirst_order_solver = \"taylor\"\n");
   CHECK_THAT(prescribed, Contains("first_order_solver") && Contains("prescribed [motion]"));
+  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nrtol = 1e-11\nfirst_order_solver = \"taylor\"\n"),
+             Contains("rtol = 1e-11") && Contains("expected >= 1e-10"));
 }
 
 TEST_CASE("bad loads and tolerances name key and line", "[io]") {
