@@ -84,7 +84,7 @@ std::shared_ptr<PyFirstOrderModel> make_first_order(std::shared_ptr<FlexibleBody
   } else {
     finite_or_throw("first_order_model: until_s", until_s);
     if (!(until_s > 0)) throw std::invalid_argument("first_order_model: until_s must be > 0 without a maneuver");
-    SimulationOptions s = sim;
+    SimulationOptions s = with_reusable_nominal(sim);  // the model's nominal motion
     s.duration_s = until_s;
     const PerturbationResult p = simulate_perturbation(*body, loads, s);
     if (!p.total.ok()) throw std::runtime_error("first_order_model: the zero-order motion failed: " + p.total.message);
@@ -209,6 +209,8 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_readwrite("duration_s", &SimulationOptions::duration_s)
       .def_readwrite("output_step_s", &SimulationOptions::output_step_s)
       .def_readwrite("trajectory_step_s", &SimulationOptions::trajectory_step_s)
+      .def_property_readonly("trajectory_step_in_use_s", &trajectory_step,
+                             "the sampling step of the zero-order motion these options give (0 above: automatic)")
       .def_property(
           "first_order_solver",
           [](const SimulationOptions& o) { return std::string(to_string(o.first_order_solver)); },

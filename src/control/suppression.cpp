@@ -101,7 +101,7 @@ SuppressionResult suppress_vibration(const FlexibleBody& body, const Suppression
 
   // 2. Open loop: the perturbation solution, then the full model.
   phase(SuppressionPhase::OpenLoop, false, 2.0 * sim.duration_s);  // the two runs, one after the other
-  SimulationOptions sim_p = sim;
+  SimulationOptions sim_p = with_reusable_nominal(sim);  // its nominal serves the TV-LQR design
   sim_p.integrator.progress = [&](double t) { progress(SuppressionPhase::OpenLoop, t); };
   res.open_loop_first_order = nominal ? simulate_perturbation_about(body, nominal_ex, nominal, sim_p)
                                       : simulate_perturbation(body, nominal_ex, sim_p);

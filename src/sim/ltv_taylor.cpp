@@ -294,6 +294,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
   const int n = form.n, N = form.N, nb = static_cast<int>(form.A.size());
   const int m = (nb - kFixed) / 3;
   validate(options);
+  if (order < 2) throw std::invalid_argument("integrate_ltv_taylor: order = " + std::to_string(order) + ", expected >= 2");
   const int K = order;
   IntegrationResult r;
   const int T = static_cast<int>(outs.size());
@@ -360,12 +361,13 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
     r.failure_time = t;
     return finish();
   };
-  // The step budgets: max_total_steps and the study's budget, charged `terms` products
-  // (a Taylor step its terms, an exponential exp_cost); false when spent.
+  // The step budgets: max_total_steps and max_steps count steps (a Taylor step, the
+  // application of an exponential), the study's budget products (a Taylor step its terms,
+  // an exponential exp_cost, its application one); false when spent.
   const long exp_cost = 10L * n;  // about the products of one exponential (Padé, squarings)
-  auto charge = [&](long terms, double t) {
-    ++steps_since_output;
-    if (options.max_total_steps > 0 && r.steps >= options.max_total_steps) {
+  auto charge = [&](long terms, double t, bool step) {
+    if (step) ++steps_since_output;
+    if (step && options.max_total_steps > 0 && r.steps >= options.max_total_steps) {
       fail_at(t, "stopped: the integration's step budget, max_total_steps = " + std::to_string(options.max_total_steps) +
                      ", is spent");
       return false;
@@ -407,6 +409,8 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
   Eigen::MatrixXd samples(kFit, nb), coef(kFit, nb), chebc(kFit, nb);
   std::vector<int> degree(nb);
   Eigen::MatrixXd X(n, K + 1);  // Taylor terms in σ = (t - t_n) / H
+  std::vector<double> sizes(static_cast<std::size_t>(K) + 1);  // their weighted sizes, from first_sized on
+  const int first_sized = std::max(1, std::min(kMinOrder, K) - 1);
   // The terms whose functions are constant on a step are summed into one matrix C0 on
   // the union of their patterns (kept for the last set of such terms: it changes between
   // pieces only); the others are applied one by one, each to Σ_j c_ij X_{k-j} on the
@@ -434,16 +438,14 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
   Eigen::VectorXd acc(n), v(n);
   const double norm_A0 = form.A[0].cwiseAbs().rowwise().sum().maxCoeff();
   const double h_max = kMaxStepNorm / std::max(norm_A0, 1e-300);
-  // atol in y: an error e in y_i moves x by at most e times the largest entry of S's
-  // column i (as the modal variables scale atol)
-  const Eigen::ArrayXd atol_y = options.atol / form.S.cwiseAbs().colwise().maxCoeff().array().transpose();
 
   for (std::size_t p = 0; p + 1 < edges.size(); ++p) {
     const double a = edges[p], b = edges[p + 1], mid = 0.5 * (a + b);
     // Constant piece? Then exact exponentials of [[A, g], [0, 0]]. Sampled at both ends
     // and at 15 points spaced by the golden ratio (equal spacing can alias a rotation:
     // whole turns between samples); and a piece that turns (θ0' not negligible) is not
-    // constant when a function that turns with it (a, u cos θ0, u sin θ0) is not zero.
+    // constant when u cos θ0 or u sin θ0 is not zero (a, the acceleration in body axes,
+    // can be constant while the body turns: a free spin about o off the mass centre).
     constexpr int kProbe = 17;
     Eigen::MatrixXd cs(kProbe, nb);
     for (int k = 0; k < kProbe; ++k) {
@@ -456,13 +458,13 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
     for (int i = 0; i < nb && constant; ++i)
       constant = cs.col(i).maxCoeff() - cs.col(i).minCoeff() <= negligible(i);
     const bool turning = cs.col(1).cwiseAbs().maxCoeff() > negligible(1);
-    for (int i = 4; i < nb && constant && turning; ++i)
-      if (i == 4 || i == 5 || (i >= kFixed && (i - kFixed) % 3 != 0))
+    for (int i = kFixed; i < nb && constant && turning; ++i)
+      if (i >= kFixed && (i - kFixed) % 3 != 0)
         constant = cs.col(i).cwiseAbs().maxCoeff() <= negligible(i);
     double t = a;
     if (constant) {
       Eigen::MatrixXd At = Eigen::MatrixXd::Zero(n + 1, n + 1);
-      const Eigen::VectorXd cm = cs.row(2).transpose();  // at a + 0.118 (b - a)
+      const Eigen::VectorXd cm = cs.row(2).transpose();  // at a + 0.736 (b - a)
       for (int i = 0; i < nb; ++i) {
         if (form.A[i].size()) At.topLeftCorner(n, n) += cm(i) * form.A[i];
         if (form.g[i].size()) At.topRightCorner(n, 1) += cm(i) * form.g[i];
@@ -480,8 +482,9 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
           E = (At * d).exp();
           cached = d;
           r.rhs_evaluations += exp_cost;
-          if (!charge(exp_cost, t)) return finish();
+          if (!charge(exp_cost, t, false)) return finish();
         }
+        if (!charge(1, t, true)) return finish();  // each application is a step
         ya << y, 1.0;
         y = E.topRows(n) * ya;
         if (!y.allFinite()) return fail_at(t, "the exponential of the piece's constant model is not finite");
@@ -540,11 +543,12 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
       tail_H = std::numeric_limits<double>::infinity();
       for (int i = 0; i < nb; ++i) {
         const double big = chebc.col(i).cwiseAbs().maxCoeff();
-        int d = kFit - 1;
-        while (d >= 0 && std::abs(chebc(d, i)) <= std::max(1e-14 * big, negligible(i))) --d;
-        degree[i] = d;  // -1: the function is zero on this step
+        int deg = kFit - 1;
+        while (deg >= 0 && std::abs(chebc(deg, i)) <= std::max(1e-14 * big, negligible(i))) --deg;
+        degree[i] = deg;  // -1: the function is zero on this step
         coef.col(i).setZero();
-        if (d >= 0) coef.col(i).head(d + 1).noalias() = mono.topLeftCorner(d + 1, d + 1) * chebc.col(i).head(d + 1);
+        if (deg >= 0)
+          coef.col(i).head(deg + 1).noalias() = mono.topLeftCorner(deg + 1, deg + 1) * chebc.col(i).head(deg + 1);
       }
       // This step's matrices and forcing polynomials.
       varying.clear();
@@ -570,7 +574,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
       Eigen::VectorXd weight = ((options.atol + options.rtol * y.array().abs()).inverse()).matrix();
       auto size_of = [&](int j) { return X.col(j).cwiseAbs().cwiseProduct(weight).maxCoeff(); };
       X.col(0) = y;
-      int p = K;  // the order used
+      int used = K;  // the order used
       for (int k = 0; k < K; ++k) {
         if (k <= Dg)
           acc = G.col(k);
@@ -584,37 +588,42 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
           term[i].multiply_add(v.data(), acc.data());
         }
         X.col(k + 1) = (H / (k + 1)) * acc;
-        if (k + 1 >= kMinOrder && k + 1 > Dg && size_of(k) <= kLocalError && size_of(k + 1) <= kLocalError) {
-          p = k + 1;
+        if (k + 1 < first_sized) continue;
+        sizes[static_cast<std::size_t>(k) + 1] = size_of(k + 1);  // each term's size once
+        if (k + 1 >= kMinOrder && k + 1 > Dg && sizes[static_cast<std::size_t>(k)] <= kLocalError &&
+            sizes[static_cast<std::size_t>(k) + 1] <= kLocalError) {
+          used = k + 1;
           break;
         }
       }
-      r.rhs_evaluations += p;
-      if (!X.leftCols(p + 1).allFinite()) return fail_at(t, "the Taylor series of the first-order model is not finite");
-      if (!charge(p, t)) return finish();
+      r.rhs_evaluations += used;
+      if (!charge(used, t, true)) return finish();
       // Step: the last two terms at σ meet the tolerances (weights from the step's start).
+      // A term that is not finite makes its size NaN (or infinite): the series has failed.
       double sigma = std::numeric_limits<double>::infinity();
-      for (int j : {p - 1, p}) {
-        const double e = size_of(j);
+      for (int j : {used - 1, used}) {
+        const double e = sizes[static_cast<std::size_t>(j)];
+        if (!std::isfinite(e)) return fail_at(t, "the Taylor series of the first-order model is not finite");
         if (e > 0.0) sigma = std::min(sigma, std::pow(kLocalError / e, 1.0 / j));
       }
-      if (p == K) sigma *= 0.9;
+      if (used == K) sigma *= 0.9;
       const double step = std::min(sigma, 1.0);
       const bool to_stop = step >= 1.0 && H == stop - t;
       const double t_new = to_stop ? stop : (step >= 1.0 ? t + H : t + step * H);
       // Outputs within the step, by Horner's rule.
       while (next_out < T && outs[next_out] <= t_new && outs[next_out] <= b) {
         const double s = (outs[next_out] - t) / H;
-        Eigen::VectorXd ys = X.col(p);
-        for (int k = p - 1; k >= 0; --k) ys = ys * s + X.col(k);
+        Eigen::VectorXd ys = X.col(used);
+        for (int k = used - 1; k >= 0; --k) ys = ys * s + X.col(k);
         const Eigen::VectorXd keep = y;
         y = ys;
         const bool ok = record(outs[next_out], mid);
         y = keep;
         if (!ok) return finish();
       }
-      Eigen::VectorXd yn = X.col(p);  // Horner
-      for (int k = p - 1; k >= 0; --k) yn = yn * step + X.col(k);
+      Eigen::VectorXd yn = X.col(used);  // Horner
+      for (int k = used - 1; k >= 0; --k) yn = yn * step + X.col(k);
+      if (!yn.allFinite()) return fail_at(t, "the Taylor series of the first-order model is not finite");  // every term is in it
       y = yn;
       t = t_new;
       ++r.steps;

@@ -133,9 +133,20 @@ std::vector<double> output_times(const SimulationOptions& o) {
   return t;
 }
 
+namespace {
+constexpr double kTrajectoryStep_s = 1e-3;        // the integrator's automatic sampling
+constexpr double kTaylorTrajectoryStep_s = 5e-3;  // the Taylor solver's (docs/benchmarks.md)
+}  // namespace
+
 double trajectory_step(const SimulationOptions& o) {
-  const double automatic = o.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor ? 5e-3 : 1e-3;
+  const double automatic =
+      o.first_order_solver == SimulationOptions::FirstOrderSolver::Taylor ? kTaylorTrajectoryStep_s : kTrajectoryStep_s;
   return std::min(o.trajectory_step_s > 0.0 ? o.trajectory_step_s : automatic, o.output_step_s);
+}
+
+SimulationOptions with_reusable_nominal(SimulationOptions o) {
+  if (!(o.trajectory_step_s > 0.0)) o.trajectory_step_s = kTrajectoryStep_s;
+  return o;
 }
 
 SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excitation, const SimulationOptions& options,

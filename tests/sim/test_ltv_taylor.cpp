@@ -155,6 +155,35 @@ TEST_CASE("Taylor solution: a spinning body under a force fixed in space is not 
   CHECK(d.q < 1e-5 * peak);
 }
 
+TEST_CASE("Taylor solution: a free spin about o off the mass centre is a constant piece", "[sim][taylor]") {
+  // The rich beam's o is off its mass centre: spun by the torque for 0.5 s, then free, its
+  // acceleration in body axes (θ0'² s0 / m) is constant but not zero. Found by review: a
+  // rule meant for u cos θ0 and u sin θ0 also kept such pieces out of the exponentials.
+  const FlexibleBody body = rich_body(4);
+  Excitation ex{{std::nullopt, std::nullopt, std::nullopt, steps({0.0, 0.5}, {1.0})}};
+  SimulationOptions o = options(1e-6, SimulationOptions::FirstOrderSolver::Taylor);
+  o.duration_s = 1.0;
+  const PerturbationResult to1 = simulate_perturbation(body, ex, o);
+  o.duration_s = 3.0;
+  const PerturbationResult to3 = simulate_perturbation(body, ex, o);
+  REQUIRE(to1.total.ok());
+  REQUIRE(to3.total.ok());
+  INFO("terms to 1 s " << to1.first_order_rhs_evaluations << ", to 3 s " << to3.first_order_rhs_evaluations);
+  // 1-3 s: one exponential (10 x 2N = 280) and its applications, no Taylor steps
+  CHECK(to3.first_order_rhs_evaluations - to1.first_order_rhs_evaluations <= 2 * 280 + 200);
+}
+
+TEST_CASE("Taylor solution: an automatic trajectory step stays 1 ms for a nominal reused elsewhere", "[sim][taylor]") {
+  SimulationOptions o = options(1e-8, SimulationOptions::FirstOrderSolver::Taylor);
+  CHECK(trajectory_step(o) == 5e-3);                         // the Taylor solver's own sampling
+  CHECK(trajectory_step(with_reusable_nominal(o)) == 1e-3);  // a TV-LQR design's nominal
+  o.trajectory_step_s = 2e-3;
+  CHECK(trajectory_step(with_reusable_nominal(o)) == 2e-3);  // a step the user gave is kept
+  o.first_order_solver = SimulationOptions::FirstOrderSolver::Integrator;
+  o.trajectory_step_s = 0.0;
+  CHECK(trajectory_step(o) == 1e-3);  // as before the Taylor solver
+}
+
 TEST_CASE("Taylor solution: max_step bounds the steps", "[sim][taylor]") {
   const FlexibleBody body = rich_body(4);
   SimulationOptions o = options(1e-8, SimulationOptions::FirstOrderSolver::Taylor);
@@ -187,6 +216,21 @@ TEST_CASE("Taylor solution: failures are reported with their time", "[sim][taylo
     CHECK(r.total.message.find(" at t = ") != std::string::npos);
     CHECK(r.total.message.find("max_total_steps = 150") != std::string::npos);
     CHECK(r.total.t.size() < 201);
+  }
+  SECTION("the step budget counts the free span's exponentials") {
+    const Beam beam(BeamProperties::uniform(1.0, 1.0, 1.0));
+    const FlexibleBody moment(beam, 6, {{"Mz", ForceElement::Type::Torque, 0.5, {0.0, 0.0}, false}});
+    const Excitation pulse{{steps({0.0, 0.5, 1.0}, {1.0, -1.0})}};
+    o.duration_s = 1.0;
+    const PerturbationResult to1 = simulate_perturbation(moment, pulse, o);
+    REQUIRE(to1.total.ok());
+    // 1-3 s adds 200 applications of one exponential (an output every 10 ms)
+    o.duration_s = 3.0;
+    o.integrator.max_total_steps = std::max(to1.total.steps - to1.zero_order.steps, to1.zero_order.steps) + 100;
+    const PerturbationResult r = simulate_perturbation(moment, pulse, o);
+    INFO(r.total.message);
+    CHECK(r.total.status == IntegrationStatus::Failed);
+    CHECK(r.total.message.find("first-order simulation: stopped: the integration's step budget") != std::string::npos);
   }
   SECTION("a deflection out of the model's range") {
     o.max_deflection_ratio = 1e-6;

@@ -83,6 +83,11 @@ std::vector<double> output_times(const SimulationOptions& options);
 /// is 0 the automatic one (1 ms; 5 ms with the Taylor first-order solver); not above
 /// the output step.
 double trajectory_step(const SimulationOptions& options);
+/// The options of a perturbation run whose nominal motion other computations reuse (a
+/// TV-LQR design, a first-order model): an automatic trajectory step is resolved to the
+/// integrator's 1 ms whatever the first-order solver (Taylor's coarser default serves its
+/// own steps only).
+SimulationOptions with_reusable_nominal(SimulationOptions options);
 
 /// Full nonlinear model (eq. 6.2) under the excitation's commands.
 SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excitation, const SimulationOptions& options,
