@@ -61,6 +61,46 @@ SparseEntries::SparseEntries(const Eigen::MatrixXd& A) {
         col.push_back(static_cast<int>(c));
         val.push_back(A(r, c));
       }
+  if (val.empty()) return;
+  r0 = *std::min_element(row.begin(), row.end());
+  c0 = *std::min_element(col.begin(), col.end());
+  const int nr = *std::max_element(row.begin(), row.end()) - r0 + 1;
+  const int nc = *std::max_element(col.begin(), col.end()) - c0 + 1;
+  dense = nr * nc >= 16 && 10 * size() >= 3 * nr * nc;
+  if (dense) {
+    box.resize(nr, nc);
+  } else if (A.rows() == A.cols() && A.rows() % 2 == 0) {
+    const int h = static_cast<int>(A.rows()) / 2;
+    int on_band = 0;
+    for (int e = 0; e < size(); ++e) on_band += std::abs(col[e] - row[e]) == h;
+    if (4 * on_band >= h) {  // worth two vector operations
+      upper.setZero(h);
+      lower.setZero(h);
+    }
+    for (int e = 0; e < size(); ++e)
+      if (upper.size() == 0 || std::abs(col[e] - row[e]) != h) rest.push_back(e);
+    for (int e : rest) {
+      rest_row.push_back(row[static_cast<std::size_t>(e)]);
+      rest_col.push_back(col[static_cast<std::size_t>(e)]);
+    }
+    rest_val.resize(rest.size());
+  }
+  refresh();
+}
+
+void SparseEntries::refresh() {
+  if (dense) {
+    box.setZero();
+    for (int e = 0; e < size(); ++e) box(row[e] - r0, col[e] - c0) = val[e];
+    return;
+  }
+  const int h = static_cast<int>(upper.size());
+  if (h > 0)
+    for (int e = 0; e < size(); ++e) {
+      if (col[e] - row[e] == h) upper(row[e]) = val[e];
+      if (row[e] - col[e] == h) lower(col[e]) = val[e];
+    }
+  for (std::size_t k = 0; k < rest.size(); ++k) rest_val[k] = val[static_cast<std::size_t>(rest[k])];
 }
 
 void LtvCoefficients::at(const Instant& when, Eigen::Ref<Eigen::VectorXd> c, double& theta0,
@@ -563,6 +603,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
         const double ci = coef(0, i);
         for (std::size_t e = 0; e < C0.val.size(); ++e) C0.val[e] += ci * on_C0[i][e];
       }
+      C0.refresh();
       int Dg = -1;
       G.setZero();
       for (int i = 0; i < nb; ++i) {

@@ -21,16 +21,40 @@ namespace freeflex::detail {
 /// and checked at random ones.
 /// A sparse matrix as its entries (row, column, value), by rows: the terms of the form
 /// are sparse in y (about 250 entries in all at 20 functions, against 2 116 of a dense
-/// matrix).
+/// matrix). One whose entries fill at least 30% of the box around them is applied as
+/// that dense box instead (the centrifugal term: 132 entries in a 22 x 20 box at NOA 20),
+/// a vectorized product some three times cheaper than the entries one by one.
 struct SparseEntries {
   std::vector<int> row, col;
   std::vector<double> val;
+  bool dense = false;
+  int r0 = 0, c0 = 0;  ///< the box's corner
+  Eigen::MatrixXd box;
+  /// Otherwise the entries on the two half-diagonals (column = row ± n/2: a position's
+  /// rate, a rate's stiffness; the oscillators of the rest modes) as vectors, and the
+  /// rest one by one.
+  Eigen::VectorXd upper, lower;
+  std::vector<int> rest;  ///< indices into row, col, val
+  std::vector<int> rest_row, rest_col;
+  std::vector<double> rest_val;
   explicit SparseEntries(const Eigen::MatrixXd& A = Eigen::MatrixXd());
   int size() const { return static_cast<int>(val.size()); }
+  /// The box or the half-diagonals and the rest from val (after val changed).
+  void refresh();
   /// acc += this x
   void multiply_add(const double* x, double* acc) const {
-    const int m = size();
-    for (int e = 0; e < m; ++e) acc[row[e]] += val[e] * x[col[e]];
+    if (dense) {
+      Eigen::Map<Eigen::VectorXd>(acc + r0, box.rows()).noalias() +=
+          box * Eigen::Map<const Eigen::VectorXd>(x + c0, box.cols());
+      return;
+    }
+    const Eigen::Index h = upper.size();
+    if (h > 0) {
+      Eigen::Map<Eigen::VectorXd>(acc, h).array() += upper.array() * Eigen::Map<const Eigen::ArrayXd>(x + h, h);
+      Eigen::Map<Eigen::VectorXd>(acc + h, h).array() += lower.array() * Eigen::Map<const Eigen::ArrayXd>(x, h);
+    }
+    const int m = static_cast<int>(rest_val.size());
+    for (int e = 0; e < m; ++e) acc[rest_row[e]] += rest_val[e] * x[rest_col[e]];
   }
 };
 
