@@ -9,6 +9,7 @@
 
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "dynamics/planar.hpp"
 #include "util/format.hpp"
 
 namespace freeflex::detail {
@@ -35,13 +36,6 @@ class FrozenTrajectory : public RigidTrajectory {
   double t_end() const override { return std::numeric_limits<double>::max(); }
   std::vector<double> breakpoints() const override { return {}; }
 };
-
-Eigen::Matrix2d rotation(double a) {
-  const double c = std::cos(a), s = std::sin(a);
-  Eigen::Matrix2d C;
-  C << c, -s, s, c;
-  return C;
-}
 
 /// Turns the R1 and R1' blocks of a state by C (x_b = C x or C x_b).
 void turn(Eigen::Ref<Eigen::VectorXd> x, const Eigen::Matrix2d& C, int N) {
@@ -108,7 +102,7 @@ void LtvCoefficients::at(const Instant& when, Eigen::Ref<Eigen::VectorXd> c, dou
   const RigidState s = nominal->at(when);
   theta0 = s.pos(2);
   const double w = s.vel(2);
-  const Eigen::Vector2d a = rotation(theta0).transpose() * s.acc.head<2>();
+  const Eigen::Vector2d a = planar::rot(theta0).transpose() * s.acc.head<2>();
   c(0) = 1.0;
   c(1) = w;
   c(2) = w * w;
@@ -139,7 +133,7 @@ class FrozenModel {
     frozen_.state.vel = Eigen::Vector3d(0.0, 0.0, w);
     frozen_.state.acc = Eigen::Vector3d(Rdd(0), Rdd(1), wd);
     const StateSpace& ss = model_.state_space(data_, Instant::at(0.0));
-    const Eigen::Matrix2d C = rotation(theta0);
+    const Eigen::Matrix2d C = planar::rot(theta0);
     Ab_ = ss.A;
     gb_ = ss.g;
     for (int i : {0, N}) {
@@ -186,7 +180,7 @@ double ltv_form_misfit(const LtvForm& f, const FlexibleBody& body, double rate_s
     const Eigen::Vector2d Rdd(sa * U(gen), sa * U(gen));
     for (int e = 0; e < m; ++e) fm.u(e) = su * U(gen);
     fm.evaluate(th, w, wd, Rdd);
-    const Eigen::Vector2d a = rotation(th).transpose() * Rdd;
+    const Eigen::Vector2d a = planar::rot(th).transpose() * Rdd;
     c.head<kFixed>() << 1.0, w, w * w, wd, a(0), a(1);
     for (int e = 0; e < m; ++e) c.segment<3>(kFixed + 3 * e) << fm.u(e), fm.u(e) * std::cos(th), fm.u(e) * std::sin(th);
     Eigen::MatrixXd sumA = Eigen::MatrixXd::Zero(n, n), size = sumA;
@@ -361,12 +355,12 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
   double theta0 = 0.0;
   long long per_term = step_work(n, IntegratorOptions::Method::Adams);
   long steps_since_output = 0;  // for max_steps
-  // The state at an output time, back in inertial coordinates.
-  auto record = [&](double t, double mid) -> bool {
+  // The state `state` (y) at an output time, back in inertial coordinates.
+  auto record = [&](double t, double mid, const Eigen::VectorXd& state) -> bool {
     const Instant at{t, mid};
     coefficients.at(at, c, theta0, u);
-    xb.noalias() = form.S * y;
-    turn(xb, rotation(theta0), N);
+    xb.noalias() = form.S * state;
+    turn(xb, planar::rot(theta0), N);
     r.t(next_out) = t;
     r.x.row(next_out) = xb.transpose();
     ++next_out;
@@ -394,7 +388,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
     r.x.conservativeResize(next_out, n);
     return r;
   };
-  if (!record(t0, t0)) return finish();
+  if (!record(t0, t0, y)) return finish();
   auto fail_at = [&](double t, const std::string& why) {
     r.status = IntegrationStatus::Failed;
     r.message = why + " at t = " + util::format_number(t, 6) + " s";
@@ -530,7 +524,7 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
         if (!y.allFinite()) return fail_at(t, "the exponential of the piece's constant model is not finite");
         ++r.steps;
         t = target;
-        if (next_out < T && outs[next_out] == t && !record(t, mid)) return finish();
+        if (next_out < T && outs[next_out] == t && !record(t, mid, y)) return finish();
         if (t == b) break;
       }
       continue;
@@ -651,19 +645,15 @@ IntegrationResult integrate_ltv_taylor(const LtvForm& form, const LtvCoefficient
       const double step = std::min(sigma, 1.0);
       const bool to_stop = step >= 1.0 && H == stop - t;
       const double t_new = to_stop ? stop : (step >= 1.0 ? t + H : t + step * H);
-      // Outputs within the step, by Horner's rule.
-      while (next_out < T && outs[next_out] <= t_new && outs[next_out] <= b) {
-        const double s = (outs[next_out] - t) / H;
-        Eigen::VectorXd ys = X.col(used);
-        for (int k = used - 1; k >= 0; --k) ys = ys * s + X.col(k);
-        const Eigen::VectorXd keep = y;
-        y = ys;
-        const bool ok = record(outs[next_out], mid);
-        y = keep;
-        if (!ok) return finish();
-      }
-      Eigen::VectorXd yn = X.col(used);  // Horner
-      for (int k = used - 1; k >= 0; --k) yn = yn * step + X.col(k);
+      // The series at σ by Horner's rule: at the outputs within the step, then at its end.
+      auto series_at = [&](double sigma_at) {
+        Eigen::VectorXd sum = X.col(used);
+        for (int k = used - 1; k >= 0; --k) sum = sum * sigma_at + X.col(k);
+        return sum;
+      };
+      while (next_out < T && outs[next_out] <= t_new && outs[next_out] <= b)
+        if (!record(outs[next_out], mid, series_at((outs[next_out] - t) / H))) return finish();
+      const Eigen::VectorXd yn = series_at(step);
       if (!yn.allFinite()) return fail_at(t, "the Taylor series of the first-order model is not finite");  // every term is in it
       y = yn;
       t = t_new;
