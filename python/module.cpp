@@ -212,6 +212,19 @@ PYBIND11_MODULE(_freeflex, m) {
       .def_property_readonly("trajectory_step_in_use_s", &trajectory_step,
                              "the sampling step of the zero-order motion these options give (0 above: automatic)")
       .def_property(
+          "full_variables", [](const SimulationOptions& o) { return std::string(to_string(o.full_variables)); },
+          [](SimulationOptions& o, const std::string& s) {
+            o.full_variables = enum_from<SimulationOptions::Variables>("full_variables", s);
+          },
+          "the full model's integration variables: physical, rest_modes (the same steps, a cheaper right-hand "
+          "side at many functions) or modal")
+      .def_property(
+          "first_order_variables",
+          [](const SimulationOptions& o) { return std::string(to_string(o.first_order_variables)); },
+          [](SimulationOptions& o, const std::string& s) {
+            o.first_order_variables = enum_from<SimulationOptions::Variables>("first_order_variables", s);
+          })
+      .def_property(
           "first_order_solver",
           [](const SimulationOptions& o) { return std::string(to_string(o.first_order_solver)); },
           [](SimulationOptions& o, const std::string& s) {

@@ -3,6 +3,8 @@
 // that run tens of thousands of times per simulated second: they add into buffers the
 // caller keeps. FlexibleBody::element_force is the reference they are tested against.
 // Private to src/.
+#include <vector>
+
 #include <Eigen/Dense>
 
 #include "freeflex/dynamics/flexible_body.hpp"
@@ -18,5 +20,25 @@ void add_element_force(const FlexibleBody& body, int e, double theta, const Eige
 /// G = Σ_e commands(e) element_force(e, theta, q) (elements with a zero command skipped).
 void generalized_force(const FlexibleBody& body, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
                        const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G);
+
+/// Each element's Φ(x_e) and Φ'(x_e) in other elastic coordinates η, q = Ψ η: the rows
+/// Φ(x_e) Ψ and Φ'(x_e) Ψ. With them the functions below give the generalized force in
+/// those coordinates, [F; M_o; Ψᵀ Q] (the forces of section 6 are linear in the rows).
+/// Not for a body with geometric stiffening (its foreshortening is quadratic in q).
+struct ElementRows {
+  std::vector<Eigen::RowVectorXd> phi, slope;
+  ElementRows() = default;
+  ElementRows(const FlexibleBody& body, const Eigen::MatrixXd& Psi);
+};
+
+/// add_element_force with element e's rows taken from `rows` and q the coordinates they
+/// are rows of.
+void add_element_force(const FlexibleBody& body, const ElementRows& rows, int e, double theta,
+                       const Eigen::Ref<const Eigen::VectorXd>& q, double scale, Eigen::Ref<Eigen::VectorXd> G);
+
+/// generalized_force in the coordinates of `rows`.
+void generalized_force(const FlexibleBody& body, const ElementRows& rows, double theta,
+                       const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& commands,
+                       Eigen::Ref<Eigen::VectorXd> G);
 
 }  // namespace freeflex::detail

@@ -246,26 +246,15 @@ FlexibleBody::ForceDerivative FlexibleBody::generalized_force_derivative(
   return r;
 }
 
-void detail::generalized_force(const FlexibleBody& body, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
-                               const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G) {
-  // plain loops: this runs at every right-hand side of the full model, where Eigen's
-  // dynamic-size set-up cost more than the sums (docs/benchmarks.md)
-  double* g = G.data();
-  for (Eigen::Index i = 0; i < G.size(); ++i) g[i] = 0.0;
-  const int ne = static_cast<int>(body.elements().size());
-  assert(commands.size() >= ne);
-  const double* u = commands.data();
-  for (int e = 0; e < ne; ++e)
-    if (u[e] != 0.0) add_element_force(body, e, theta, q, u[e], G);
-}
+namespace {
 
-void detail::add_element_force(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
-                               double scale, Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q,
-                               Eigen::VectorXd* dG) {
-  const int n = body.n();
+/// The generalized forces of detail:: with element e's rows given (phi, dphi: Φ(x_e),
+/// Φ'(x_e) in the coordinates q is given in).
+void add_force_with_rows(const FlexibleBody& body, int e, const Eigen::RowVectorXd& phi, const Eigen::RowVectorXd& dphi,
+                         double theta, const Eigen::Ref<const Eigen::VectorXd>& q, double scale,
+                         Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q, Eigen::VectorXd* dG) {
+  const int n = static_cast<int>(phi.size());
   const ForceElement& el = body.elements()[e];
-  const Eigen::RowVectorXd& phi = body.element_phi(e);
-  const Eigen::RowVectorXd& dphi = body.element_slope(e);
   if (el.type == ForceElement::Type::Torque) {  // eq. 6.4c: no dependence on configuration
     double* g = G.data();
     const double* slope = dphi.data();
@@ -306,6 +295,54 @@ void detail::add_element_force(const FlexibleBody& body, int e, double theta, co
     dG->tail(n).noalias() -= (scale * sa * dw(0)) * Haq;
     if (d_q) dG->tail(n).noalias() -= (scale * sa * w(0)) * (Ha * *d_q);
   }
+}
+
+/// G = Σ_e commands(e) add(e, commands(e)), elements with a zero command skipped. Plain
+/// loops: this runs at every right-hand side of the full model, where Eigen's dynamic-size
+/// set-up cost more than the sums (docs/benchmarks.md).
+template <class Add>
+void sum_element_forces(const FlexibleBody& body, const Eigen::Ref<const Eigen::VectorXd>& commands,
+                        Eigen::Ref<Eigen::VectorXd> G, const Add& add) {
+  double* g = G.data();
+  for (Eigen::Index i = 0; i < G.size(); ++i) g[i] = 0.0;
+  const int ne = static_cast<int>(body.elements().size());
+  assert(commands.size() >= ne);
+  const double* u = commands.data();
+  for (int e = 0; e < ne; ++e)
+    if (u[e] != 0.0) add(e, u[e]);
+}
+
+}  // namespace
+
+void detail::generalized_force(const FlexibleBody& body, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                               const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G) {
+  sum_element_forces(body, commands, G, [&](int e, double u) { add_element_force(body, e, theta, q, u, G); });
+}
+
+void detail::add_element_force(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
+                               double scale, Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q,
+                               Eigen::VectorXd* dG) {
+  add_force_with_rows(body, e, body.element_phi(e), body.element_slope(e), theta, q, scale, G, d_theta, d_q, dG);
+}
+
+detail::ElementRows::ElementRows(const FlexibleBody& body, const Eigen::MatrixXd& Psi) {
+  if (body.geometric_stiffening())
+    throw std::invalid_argument("element rows in other coordinates: not for a body with geometric stiffening");
+  for (int e = 0; e < static_cast<int>(body.elements().size()); ++e) {
+    phi.push_back(body.element_phi(e) * Psi);
+    slope.push_back(body.element_slope(e) * Psi);
+  }
+}
+
+void detail::add_element_force(const FlexibleBody& body, const ElementRows& rows, int e, double theta,
+                               const Eigen::Ref<const Eigen::VectorXd>& q, double scale, Eigen::Ref<Eigen::VectorXd> G) {
+  add_force_with_rows(body, e, rows.phi[e], rows.slope[e], theta, q, scale, G, 0.0, nullptr, nullptr);
+}
+
+void detail::generalized_force(const FlexibleBody& body, const ElementRows& rows, double theta,
+                               const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Ref<const Eigen::VectorXd>& commands,
+                               Eigen::Ref<Eigen::VectorXd> G) {
+  sum_element_forces(body, commands, G, [&](int e, double u) { add_element_force(body, rows, e, theta, q, u, G); });
 }
 
 double FlexibleBody::vibration_energy(const Eigen::Ref<const Eigen::VectorXd>& q,

@@ -10,8 +10,8 @@
 
 namespace freeflex::detail {
 
-/// A range check for OdeSystem: q is at x.segment(q_offset, n).
+/// A range check for OdeSystem: q is at x.segment(q_offset, n), or q = to_q η with η there.
 std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>&)> deflection_check(
-    const FlexibleBody& body, const SimulationOptions& options, int q_offset);
+    const FlexibleBody& body, const SimulationOptions& options, int q_offset, const Eigen::MatrixXd* to_q = nullptr);
 
 }  // namespace freeflex::detail

@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
 #include "dynamics/body_kernels.hpp"
+#include "dynamics/rest_mode_model.hpp"
 #include "model/commands.hpp"
 #include "util/format.hpp"
 #include "sim/ltv_taylor.hpp"
@@ -87,8 +89,8 @@ Eigen::MatrixXd deflection_sampler(const FlexibleBody& body, int points) {
 namespace detail {
 
 std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>&)> deflection_check(
-    const FlexibleBody& body, const SimulationOptions& options, int q_offset) {
-  const Eigen::MatrixXd P = deflection_sampler(body);
+    const FlexibleBody& body, const SimulationOptions& options, int q_offset, const Eigen::MatrixXd* to_q) {
+  const Eigen::MatrixXd P = to_q ? Eigen::MatrixXd(deflection_sampler(body) * *to_q) : deflection_sampler(body);
   const double length = body.beam().x_right() - body.beam().x_left();
   const double limit = options.max_deflection_ratio * length;
   const int n = body.n();
@@ -118,6 +120,9 @@ std::vector<FieldProblem> problems(const SimulationOptions& o) {
                                           ", expected a finite value > 0, or 0 for the automatic step"});
   if (!(o.max_deflection_ratio > 0.0))
     p.push_back({"max_deflection_ratio", "max_deflection_ratio = " + num(o.max_deflection_ratio) + ", expected > 0"});
+  if (o.first_order_variables == SimulationOptions::Variables::RestModes)
+    p.push_back({"first_order_variables", "first_order_variables = rest_modes: the full model's only (its mass matrix "
+                                          "is what the coordinates simplify), expected physical or modal"});
   for (const FieldProblem& q : problems(o.integrator)) p.push_back({"integrator." + q.field, "integrator." + q.message});
   return p;
 }
@@ -152,55 +157,86 @@ SimulationOptions with_reusable_nominal(SimulationOptions o) {
 SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excitation, const SimulationOptions& options,
                                const Eigen::VectorXd& x_initial) {
   const auto t0 = Clock::now();
-  const FullModel model(body);
+  validate(options);
+  const bool rest_modes = options.full_variables == SimulationOptions::Variables::RestModes;
+  std::optional<FullModel> model;                     // the state [z, z']
+  std::unique_ptr<const detail::RestModeModel> rest;  // or q taken to the modes at rest
+  if (rest_modes)
+    rest = std::make_unique<const detail::RestModeModel>(body);
+  else
+    model.emplace(body);
   const int N = body.dofs(), ne = static_cast<int>(body.elements().size());
   Eigen::VectorXd x0 = x_initial.size() ? x_initial : Eigen::VectorXd::Zero(2 * N);
   if (x0.size() != 2 * N)
     throw std::invalid_argument("simulate_full: expected an initial state of size " + std::to_string(2 * N) +
                                 ", got " + std::to_string(x0.size()));
-  auto data = std::make_shared<FullModel::Data>(model.create_data());
   auto u = std::make_shared<Eigen::VectorXd>(ne);
   OdeSystem sys;
   sys.dim = 2 * N;
   // the mass matrix left the model's range at the last evaluation (the explicit pairs
   // reject a trial step the model refuses and go on, so only the last one counts)
   auto singular = std::make_shared<bool>(false);
-  sys.rhs = [&model, &excitation, data, u, singular](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
-                                                     Eigen::Ref<Eigen::VectorXd> xd) {
-    detail::evaluate_commands(excitation, at, *u);
-    *singular = !model.rhs(*data, x, *u);
-    if (*singular) return false;
-    xd = data->x_dot;
-    return true;
-  };
+  if (rest) {
+    auto data = std::make_shared<detail::RestModeModel::Data>(rest->create_data());
+    sys.rhs = [m = rest.get(), &excitation, data, u, singular](
+                  const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
+      detail::evaluate_commands(excitation, at, *u);
+      *singular = !m->rhs(*data, y, *u);
+      if (*singular) return false;
+      yd = data->y_dot;
+      return true;
+    };
+  } else {
+    auto data = std::make_shared<FullModel::Data>(model->create_data());
+    sys.rhs = [m = &*model, &excitation, data, u, singular](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                            Eigen::Ref<Eigen::VectorXd> xd) {
+      detail::evaluate_commands(excitation, at, *u);
+      *singular = !m->rhs(*data, x, *u);
+      if (*singular) return false;
+      xd = data->x_dot;
+      return true;
+    };
+  }
   sys.last_error = [&body] {
     return std::string(body.geometric_stiffening()
                            ? "the mass matrix came near singular or indefinite (the second-order kinetic energy no "
                              "longer holds: state out of range)"
                            : "the mass matrix lost positive definiteness (state out of range)");
   };
-  sys.range_check = detail::deflection_check(body, options, 3);
+  sys.range_check = detail::deflection_check(body, options, 3, rest ? &rest->modes() : nullptr);
   // Work of the loads and the damping, ż·(G − D ż), for the energy balance (outside the
   // error test: the states are the same with or without it). Not in modal variables: their
   // steps span many periods of the free oscillation, which the power then aliases (3 % off
-  // on the paper's force pulse), and an error test of its own would change the steps.
+  // on the paper's force pulse), and an error test of its own would change the steps. The
+  // power is the same number in rest-mode coordinates, from the force and damping there.
   auto uq = std::make_shared<Eigen::VectorXd>(ne);
   auto Gq = std::make_shared<Eigen::VectorXd>(N);
-  if (options.energy_balance && options.full_variables == SimulationOptions::Variables::Physical)
+  if (options.energy_balance && options.full_variables != SimulationOptions::Variables::Modal)
     sys.quadrature_dim = 1;
-  sys.quadrature = [&body, &excitation, uq, Gq, N](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
-                                                   Eigen::Ref<Eigen::VectorXd> w) {
+  sys.quadrature = [&body, &excitation, m = rest.get(), uq, Gq, N](
+                       const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> w) {
     detail::evaluate_commands(excitation, at, *uq);
     const auto zd = x.tail(N);
-    detail::generalized_force(body, x(2), x.segment(3, N - 3), *uq, *Gq);
+    if (m)
+      m->generalized_force(x(2), x.segment(3, N - 3), *uq, *Gq);
+    else
+      detail::generalized_force(body, x(2), x.segment(3, N - 3), *uq, *Gq);
     double p = zd.dot(*Gq);
-    if (body.damped()) p -= zd.dot(body.damping() * zd);
+    if (body.damped()) p -= zd.dot((m ? m->damping() : body.damping()) * zd);
     w(0) = p;
     return true;
   };
   const auto modal = use_variables(options.full_variables, body, sys, nullptr);
-  const IntegrationResult ir =
+  if (rest) x0 = rest->to_rest_modes(x0);
+  IntegrationResult ir =
       integrate(sys, x0, output_times(options), breakpoints_within(excitation, options.duration_s), options.integrator);
+  if (rest) {  // the outputs in physical coordinates
+    Eigen::VectorXd x(2 * N);
+    for (Eigen::Index i = 0; i < ir.x.rows(); ++i) {
+      rest->to_physical(ir.x.row(i).transpose(), x);
+      ir.x.row(i) = x.transpose();
+    }
+  }
   SimulationResult r;
   r.status = ir.status == IntegrationStatus::Failed && *singular ? IntegrationStatus::OutOfRange : ir.status;
   r.message = ir.message;

@@ -24,12 +24,15 @@ struct SimulationOptions {
   /// every sample, where the interpolant's third derivative jumps; at 5 ms the moment
   /// example at NOA 20 takes 30% less work and is as accurate, docs/benchmarks.md).
   double trajectory_step_s = 0.0;
-  /// What CVODE integrates (docs/theory.md section 8): the state [z, z'] itself, or
-  /// modal amplitudes that leave the free elastic oscillation out. Same equations; the
-  /// modal form takes far fewer steps when the oscillation is nearly free (the
-  /// first-order model always; the full model at rotation rates well below the first
-  /// elastic frequency) and more when fast rotation couples the modes.
-  enum class Variables { Physical, Modal };
+  /// What the integrator integrates (docs/theory.md section 8): the state [z, z'] itself
+  /// (Physical); the same with q taken to the modes at rest, q = Ψ η (RestModes, the full
+  /// model only: the same steps and accuracy as Physical, a right-hand side whose cost
+  /// grows as n instead of n², about half the time at NOA 20); or modal amplitudes that
+  /// leave the free elastic oscillation out (Modal). Same equations; the modal form takes
+  /// far fewer steps when the oscillation is nearly free (the first-order model always;
+  /// the full model at rotation rates well below the first elastic frequency) and more
+  /// when fast rotation couples the modes. Results are always reported as [z, z'].
+  enum class Variables { Physical, Modal, RestModes };
   Variables full_variables = Variables::Physical;      ///< of the full nonlinear model
   Variables first_order_variables = Variables::Modal;  ///< of the first-order model
   /// How the perturbation solution's first-order model is integrated: by `integrator`
@@ -142,8 +145,10 @@ GlobalErrorEstimate compare_runs(const SimulationResult& run, const SimulationRe
 template <>
 struct EnumNames<SimulationOptions::Variables> {
   static constexpr const char* what = "integration variables";
-  static constexpr std::array<std::pair<SimulationOptions::Variables, const char*>, 2> names{
-      {{SimulationOptions::Variables::Physical, "physical"}, {SimulationOptions::Variables::Modal, "modal"}}};
+  static constexpr std::array<std::pair<SimulationOptions::Variables, const char*>, 3> names{
+      {{SimulationOptions::Variables::Physical, "physical"},
+       {SimulationOptions::Variables::Modal, "modal"},
+       {SimulationOptions::Variables::RestModes, "rest_modes"}}};
 };
 
 template <>

@@ -1,0 +1,203 @@
+// The full model in rest-mode coordinates (rest_mode_model.hpp).
+#include "dynamics/rest_mode_model.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "util/vec4.hpp"
+
+namespace freeflex::detail {
+
+using util::V4;
+using util::load4;
+using util::splat4;
+using util::store4;
+
+RestModeModel::RestModeModel(const FlexibleBody& body) : body_(body), n_(body.n()) {
+  if (body.geometric_stiffening())
+    throw std::invalid_argument(
+        "full_model_variables = rest_modes does not support geometric stiffening (its mass matrix changes in the "
+        "elastic entries too); use physical or modal");
+  const RestModes modes = rest_modes(body);
+  Psi_ = modes.Phi;
+  Psi_inverse_ = Psi_.transpose() * modes.M_c;
+  lambda_ = modes.omega2;
+  const Eigen::MatrixXd M0 = body.mass_matrix(0.0, Eigen::VectorXd::Zero(n_));
+  const Eigen::Matrix3d A = M0.topLeftCorner<3, 3>();
+  A_inverse_ = A.ldlt().solve(Eigen::Matrix3d::Identity());
+  if (!M0.block(0, 3, 1, n_).isZero(0.0))
+    throw std::logic_error("rest-mode coordinates: the body-frame mass matrix couples x with q (eq. 6.1 has no such entry)");
+  B_y_ = (M0.block(1, 3, 1, n_) * Psi_).transpose();
+  B_theta_ = (M0.block(2, 3, 1, n_) * Psi_).transpose();
+  S_o_ = body.integrals().S_o;
+  const int N = 3 + n_;
+  // the Woodbury columns: 𝕄_η(0)⁻¹ e_x and 𝕄_η(0)⁻¹ e_θ from the block inverse
+  auto rest_solve = [&](const Eigen::Vector3d& g_r) {  // g_η = 0
+    const Eigen::Vector3d u = A_inverse_ * g_r;
+    Eigen::VectorXd y(N);
+    y.tail(n_) = -(B_y_ * u(1) + B_theta_ * u(2));
+    y.head<3>() = u - A_inverse_ * Eigen::Vector3d(0.0, B_y_.dot(y.tail(n_)), B_theta_.dot(y.tail(n_)));
+    return y;
+  };
+  W_x_ = rest_solve(Eigen::Vector3d::UnitX());
+  W_theta_ = rest_solve(Eigen::Vector3d::UnitZ());
+  if (body.damped()) {
+    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(N, N);
+    S.topLeftCorner<3, 3>().setIdentity();
+    S.bottomRightCorner(n_, n_) = Psi_;
+    D_ = S.transpose() * body.damping() * S;
+  }
+  rows_ = ElementRows(body, Psi_);
+}
+
+RestModeModel::Data RestModeModel::create_data() const {
+  const int N = 3 + n_;
+  Data d;
+  d.y_dot.resize(2 * N);
+  d.G.resize(N);
+  d.g.resize(N);
+  d.Dzd.resize(N);
+  return d;
+}
+
+Eigen::VectorXd RestModeModel::to_rest_modes(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  const int N = 3 + n_;
+  Eigen::VectorXd y = x;
+  y.segment(3, n_) = Psi_inverse_ * x.segment(3, n_);
+  y.segment(N + 3, n_) = Psi_inverse_ * x.segment(N + 3, n_);
+  return y;
+}
+
+void RestModeModel::to_physical(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> x) const {
+  const int N = 3 + n_;
+  x = y;
+  x.segment(3, n_).noalias() = Psi_ * y.segment(3, n_);
+  x.segment(N + 3, n_).noalias() = Psi_ * y.segment(N + 3, n_);
+}
+
+void RestModeModel::generalized_force(double theta, const Eigen::Ref<const Eigen::VectorXd>& eta,
+                                      const Eigen::Ref<const Eigen::VectorXd>& commands,
+                                      Eigen::Ref<Eigen::VectorXd> G) const {
+  detail::generalized_force(body_, rows_, theta, eta, commands, G);
+}
+
+namespace {
+
+/// The arithmetic of rhs() on raw arrays, in three passes over the n elastic entries, four
+/// at a time (fixed lanes, so the same bits in every variant: this file is built without
+/// fused multiply-adds). G: the generalized force (R rows inertial), Dz: D ż or null.
+FREEFLEX_AVX2_CLONES bool rest_mode_kernel(int n, const double* x, const double* G, const double* Dz, const double* By,
+                                          const double* Bt, const double* L, const double* Wx, const double* Wt,
+                                          const double* Ai, double S_o, double* out) {
+  const int N = 3 + n;
+  const double* z = x;
+  const double* zd = x + N;
+  const double* eta = z + 3;
+  const double* etad = zd + 3;
+  const double th = z[2], thd = zd[2], thd2 = thd * thd;
+  const double c = std::cos(th), s = std::sin(th);
+  // 1. b = B η, b' = B η' (b_y = Φ̄ q, b_θ = Φ̃ q), ηᵀη, ηᵀη'
+  V4 a1 = splat4(0.0), a2 = a1, ad1 = a1, ad2 = a1, aee = a1, aeed = a1;
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const V4 e = load4(eta + i), ed = load4(etad + i), y = load4(By + i), t = load4(Bt + i);
+    a1 += y * e;
+    a2 += t * e;
+    ad1 += y * ed;
+    ad2 += t * ed;
+    aee += e * e;
+    aeed += e * ed;
+  }
+  double b1 = util::lane_sum(a1), b2 = util::lane_sum(a2), bd1 = util::lane_sum(ad1), bd2 = util::lane_sum(ad2),
+         ee = util::lane_sum(aee), eed = util::lane_sum(aeed);
+  for (; i < n; ++i) {
+    b1 += By[i] * eta[i];
+    b2 += Bt[i] * eta[i];
+    bd1 += By[i] * etad[i];
+    bd2 += Bt[i] * etad[i];
+    ee += eta[i] * eta[i];
+    eed += eta[i] * etad[i];
+  }
+  // Ψᵀ M q = η + Bᵀ a with a = A⁻¹ b (b_x = 0); qᵀ M q = ηᵀη + bᵀ a; qᵀ M q' = ηᵀη' + b'ᵀ a
+  // (Ai: A⁻¹ column-major)
+  const double ay = Ai[4] * b1 + Ai[7] * b2, at = Ai[5] * b1 + Ai[8] * b2;  // a_x enters nothing
+  const double qMq = ee + (b1 * ay + b2 * at), qMqd = eed + (bd1 * ay + bd2 * at);
+  const double Pq = b1, Pqd = bd1;  // B's y row is Φ̄ Ψ
+  // 2. g = Tᵀ (G − h − K q − D z') as FullModel::rhs, the elastic rows projected on Ψ, and
+  // y = 𝕄_η(0)⁻¹ g by the block inverse: u = A⁻¹ g_r, y_η = g_η − Bᵀ u, y_r = u − A⁻¹ B y_η
+  double gr0 = c * G[0] + s * G[1] + thd2 * S_o + 2.0 * thd * Pqd;
+  double gr1 = -s * G[0] + c * G[1] + thd2 * Pq;
+  double gr2 = G[2] - 2.0 * thd * qMqd;
+  if (Dz) {
+    gr0 -= c * Dz[0] + s * Dz[1];
+    gr1 -= -s * Dz[0] + c * Dz[1];
+    gr2 -= Dz[2];
+  }
+  const double u0 = Ai[0] * gr0 + Ai[3] * gr1 + Ai[6] * gr2, u1 = Ai[1] * gr0 + Ai[4] * gr1 + Ai[7] * gr2,
+               u2 = Ai[2] * gr0 + Ai[5] * gr1 + Ai[8] * gr2;
+  // y_η,i = G_i + (θ'² − λ_i) η_i + B_y,i (θ'² a_y − u_y) + B_θ,i (θ'² a_θ − u_θ) − (D ż)_i
+  const double cy = thd2 * ay - u1, ct = thd2 * at - u2;
+  double* w = out + N;  // z'' (body axes until the end)
+  V4 sy = splat4(0.0), st = sy;
+  const V4 vthd2 = splat4(thd2), vcy = splat4(cy), vct = splat4(ct);
+  i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const V4 y = load4(By + i), t = load4(Bt + i);
+    V4 v = load4(G + 3 + i) + (vthd2 - load4(L + i)) * load4(eta + i) + (y * vcy + t * vct);
+    if (Dz) v = v - load4(Dz + 3 + i);
+    store4(w + 3 + i, v);
+    sy += y * v;
+    st += t * v;
+  }
+  double By_y = util::lane_sum(sy), Bt_y = util::lane_sum(st);
+  for (; i < n; ++i) {
+    double v = G[3 + i] + (thd2 - L[i]) * eta[i] + (By[i] * cy + Bt[i] * ct);
+    if (Dz) v -= Dz[3 + i];
+    w[3 + i] = v;
+    By_y += By[i] * v;
+    Bt_y += Bt[i] * v;
+  }
+  w[0] = u0 - (Ai[3] * By_y + Ai[6] * Bt_y);
+  w[1] = u1 - (Ai[4] * By_y + Ai[7] * Bt_y);
+  w[2] = u2 - (Ai[5] * By_y + Ai[8] * Bt_y);
+  // 3. 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ], S = [[0, −Φ̄q], [−Φ̄q, qᵀMq]]: the rigid
+  // entries only, the same in any elastic coordinates (FullModel::rhs), by Woodbury
+  const double aa = -Pq, cc = qMq;
+  const double W00 = Wx[0], W01 = Wt[0], W20 = Wx[2], W21 = Wt[2];
+  const double k00 = 1.0 + W01 * aa, k01 = W00 * aa + W01 * cc, k10 = W21 * aa, k11 = 1.0 + W20 * aa + W21 * cc;
+  const double det = k00 * k11 - k01 * k10;  // det 𝕄_b(q) / det 𝕄_b(0)
+  if (!(det > 0.0)) return false;
+  const double v0 = (k11 * w[0] - k01 * w[2]) / det, v1 = (k00 * w[2] - k10 * w[0]) / det;
+  const double Sv0 = aa * v1, Sv1 = aa * v0 + cc * v1;
+  const V4 vS0 = splat4(Sv0), vS1 = splat4(Sv1);
+  i = 0;
+  for (; i + 4 <= N; i += 4) store4(w + i, load4(w + i) - (load4(Wx + i) * vS0 + load4(Wt + i) * vS1));
+  for (; i < N; ++i) w[i] -= Wx[i] * Sv0 + Wt[i] * Sv1;
+  const double wx = w[0], wy = w[1];
+  w[0] = c * wx - s * wy;
+  w[1] = s * wx + c * wy;
+  for (i = 0; i < N; ++i) out[i] = zd[i];
+  return true;
+}
+
+}  // namespace
+
+bool rest_mode_rhs(const RestModeModel& m, RestModeModel::Data& d, const double* x,
+                   const Eigen::Ref<const Eigen::VectorXd>& commands) {
+  const int n = m.n_, N = 3 + n;
+  m.generalized_force(x[2], Eigen::Map<const Eigen::VectorXd>(x + 3, n), commands, d.G);
+  const double* Dz = nullptr;
+  if (m.body_.damped()) {
+    d.Dzd.noalias() = m.D_ * Eigen::Map<const Eigen::VectorXd>(x + N, N);
+    Dz = d.Dzd.data();
+  }
+  return rest_mode_kernel(n, x, d.G.data(), Dz, m.B_y_.data(), m.B_theta_.data(), m.lambda_.data(), m.W_x_.data(),
+                          m.W_theta_.data(), m.A_inverse_.data(), m.S_o_, d.y_dot.data());
+}
+
+bool RestModeModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  return rest_mode_rhs(*this, d, y.data(), commands);
+}
+
+}  // namespace freeflex::detail

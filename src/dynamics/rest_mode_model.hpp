@@ -1,0 +1,75 @@
+#pragma once
+// The full nonlinear model (eq. 6.2) with its elastic coordinates taken to the modes of
+// the body at rest, q = Ψ η (SimulationOptions::Variables::RestModes; docs/theory.md
+// section 8, "Rest-mode coordinates"). The same equations as FullModel, whose state
+// x = [R, θ, q, R', θ', q'] maps to y = [R, θ, η, R', θ', η'] one to one; only the
+// arithmetic is cheaper. With Ψᵀ M_c Ψ = I and Ψᵀ K Ψ = Λ (rest_modes) the body-frame
+// mass matrix at rest becomes
+//
+//     𝕄_η(0) = [[A, B], [Bᵀ, I + Bᵀ A⁻¹ B]],   A = 𝕄_rr (3 x 3), B = 𝕄_rq Ψ (3 x n),
+//
+// whose inverse is [[A⁻¹ + A⁻¹ B Bᵀ A⁻¹, −A⁻¹ B], [−Bᵀ A⁻¹, I]] (the Schur complement of A
+// is the identity), and Ψᵀ M Ψ = I + Bᵀ A⁻¹ B. So M q, K q and the solve with 𝕄_b(0),
+// dense n x n and (3+n) x (3+n) products in physical coordinates, become a few products
+// with the 3 x n matrix B: the right-hand side's cost grows as n, not n². Private to src/.
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "dynamics/body_kernels.hpp"
+#include "freeflex/dynamics/flexible_body.hpp"
+
+namespace freeflex::detail {
+
+class RestModeModel {
+ public:
+  /// Workspace of one thread of evaluation: y' of the last rhs() and scratch.
+  struct Data {
+    Eigen::VectorXd y_dot, G, g, Dzd;
+  };
+
+  /// Throws std::invalid_argument for a body with geometric stiffening (its mass matrix
+  /// changes in more than the rigid entries; not supported in these coordinates), and
+  /// std::runtime_error when the modes at rest cannot be computed.
+  explicit RestModeModel(const FlexibleBody& body);
+  const FlexibleBody& body() const { return body_; }
+  int n() const { return n_; }
+  int state_size() const { return 2 * (3 + n_); }
+  Data create_data() const;
+  /// Ψ: q = Ψ η (the columns are the modes, Ψᵀ M_c Ψ = I).
+  const Eigen::MatrixXd& modes() const { return Psi_; }
+
+  /// y from x = [R, θ, q, R', θ', q'] (η = Ψᵀ M_c q), and x from y.
+  Eigen::VectorXd to_rest_modes(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  void to_physical(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> x) const;
+
+  /// y' for y under element commands u, into data.y_dot; false where the mass matrix is
+  /// not positive definite (as FullModel::rhs).
+  bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& commands) const;
+
+  /// The generalized force in these coordinates, [F (inertial axes); M_o; Ψᵀ Q], into G
+  /// (3+n). The power ż·G is the same number in either coordinates.
+  void generalized_force(double theta, const Eigen::Ref<const Eigen::VectorXd>& eta,
+                         const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G) const;
+  /// The modal damping in these coordinates, Sᵀ D S with S = blockdiag(I₃, Ψ).
+  const Eigen::MatrixXd& damping() const { return D_; }
+
+ private:
+  const FlexibleBody& body_;
+  int n_;
+  Eigen::MatrixXd Psi_;          ///< q = Ψ η
+  Eigen::MatrixXd Psi_inverse_;  ///< Ψ⁻¹ = Ψᵀ M_c
+  Eigen::VectorXd lambda_;       ///< ω², the diagonal of Ψᵀ K Ψ
+  Eigen::Matrix3d A_inverse_;    ///< 𝕄_rr⁻¹ at rest
+  /// The y and θ rows of B = 𝕄_rq Ψ, Φ̄ Ψ and Φ̃ Ψ (its x row is zero: 𝕄_rq = [0; Φ̄; Φ̃])
+  Eigen::VectorXd B_y_, B_theta_;
+  Eigen::VectorXd W_x_, W_theta_;  ///< the x and θ columns of 𝕄_η(0)⁻¹ (Woodbury)
+  Eigen::MatrixXd D_;              ///< damping in these coordinates (empty when undamped)
+  ElementRows rows_;               ///< Φ(x_e) Ψ, Φ'(x_e) Ψ
+  double S_o_;
+
+  friend bool rest_mode_rhs(const RestModeModel& m, Data& d, const double* x,
+                            const Eigen::Ref<const Eigen::VectorXd>& commands);
+};
+
+}  // namespace freeflex::detail
