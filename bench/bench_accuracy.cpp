@@ -61,7 +61,8 @@ SimulationOptions options(double duration, double rtol, IntegratorOptions::Metho
   o.integrator.rtol = rtol;
   o.integrator.atol = rtol * atol_ratio;
   o.integrator.method = m;
-  o.full_variables = o.first_order_variables = v;
+  o.full_variables = v;
+  if (v != SimulationOptions::Variables::RestModes) o.first_order_variables = v;  // the full model's only
   return o;
 }
 
@@ -94,6 +95,8 @@ void table(int reps, const std::string& only, const std::vector<int>& noas) {
                          {"full, BDF, physical", true, M::Bdf, V::Physical, {}},
                          {"full, DOP853, physical", true, M::Dop853, V::Physical, tight},
                          {"full, Verner 9(8), physical", true, M::Verner98, V::Physical, tight},
+                         {"full, DOP853, rest modes", true, M::Dop853, V::RestModes, tight},
+                         {"full, Verner 9(8), rest modes", true, M::Verner98, V::RestModes, tight},
                          {"perturbation, Adams, modal (default)", false, M::Adams, V::Modal, {}},
                          {"perturbation, Adams, physical", false, M::Adams, V::Physical, {}},
                          {"perturbation, DOP853, modal", false, M::Dop853, V::Modal, {1e-6, 1e-8, 1e-10}},
@@ -165,7 +168,9 @@ void sweep(int reps, const std::string& only, const std::vector<int>& noas, doub
   using V = SimulationOptions::Variables;
   const Option opts[] = {{"full, Adams, physical (default)", true, M::Adams, V::Physical, {}},
                          {"full, DOP853, physical", true, M::Dop853, V::Physical, {}},
-                         {"full, Verner 9(8), physical", true, M::Verner98, V::Physical, {}}};
+                         {"full, Verner 9(8), physical", true, M::Verner98, V::Physical, {}},
+                         {"full, DOP853, rest modes", true, M::Dop853, V::RestModes, {}},
+                         {"full, Verner 9(8), rest modes", true, M::Verner98, V::RestModes, {}}};
   std::cout << "load average at start: " << load_average() << "\n";
   for (int noa : noas) {
     const double T = noa == 20 || noa == 40 ? 1.0 : 3.0;
