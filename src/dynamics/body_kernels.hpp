@@ -22,11 +22,13 @@ void generalized_force(const FlexibleBody& body, double theta, const Eigen::Ref<
                        const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G);
 
 /// Each element's Φ(x_e) and Φ'(x_e) in other elastic coordinates η, q = Ψ η: the rows
-/// Φ(x_e) Ψ and Φ'(x_e) Ψ. With them the functions below give the generalized force in
-/// those coordinates, [F; M_o; Ψᵀ Q] (the forces of section 6 are linear in the rows).
-/// Not for a body with geometric stiffening (its foreshortening is quadratic in q).
+/// Φ(x_e) Ψ and Φ'(x_e) Ψ, and with geometric stiffening its foreshortening Ψᵀ H(x_e) Ψ.
+/// With them the functions below give the generalized force in those coordinates,
+/// [F; M_o; Ψᵀ Q] (the forces of sections 6 and 14 are linear in the rows, quadratic
+/// forms in H).
 struct ElementRows {
   std::vector<Eigen::RowVectorXd> phi, slope;
+  std::vector<Eigen::MatrixXd> H;  ///< empty matrices without geometric stiffening
   ElementRows() = default;
   ElementRows(const FlexibleBody& body, const Eigen::MatrixXd& Psi);
 };

@@ -249,9 +249,10 @@ FlexibleBody::ForceDerivative FlexibleBody::generalized_force_derivative(
 namespace {
 
 /// The generalized forces of detail:: with element e's rows given (phi, dphi: Φ(x_e),
-/// Φ'(x_e) in the coordinates q is given in).
+/// Φ'(x_e) in the coordinates q is given in; Ha: H(x_e) in them, read with geometric
+/// stiffening only).
 void add_force_with_rows(const FlexibleBody& body, int e, const Eigen::RowVectorXd& phi, const Eigen::RowVectorXd& dphi,
-                         double theta, const Eigen::Ref<const Eigen::VectorXd>& q, double scale,
+                         const Eigen::MatrixXd& Ha, double theta, const Eigen::Ref<const Eigen::VectorXd>& q, double scale,
                          Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q, Eigen::VectorXd* dG) {
   const int n = static_cast<int>(phi.size());
   const ForceElement& el = body.elements()[e];
@@ -276,7 +277,6 @@ void add_force_with_rows(const FlexibleBody& body, int e, const Eigen::RowVector
   const bool shortens = body.geometric_stiffening() && xa != 0.0;  // eq. 14.7
   const double sa = xa > 0.0 ? 1.0 : -1.0;
   if (shortens) {
-    const Eigen::MatrixXd& Ha = body.element_foreshortening(e);
     const double ha = 0.5 * q.dot(Ha * q);
     G(2) -= scale * w(1) * sa * ha;
     G.tail(n).noalias() -= (scale * sa * w(0)) * (Ha * q);
@@ -288,7 +288,6 @@ void add_force_with_rows(const FlexibleBody& body, int e, const Eigen::RowVector
   (*dG)(2) += scale * (-dw(0) * ua - w(0) * dua + dw(1) * xa);
   dG->tail(n).noalias() += (scale * dw(1)) * phi.transpose();
   if (shortens) {
-    const Eigen::MatrixXd& Ha = body.element_foreshortening(e);
     const Eigen::VectorXd Haq = Ha * q;
     const double ha = 0.5 * q.dot(Haq), dha = d_q ? Haq.dot(*d_q) : 0.0;
     (*dG)(2) -= scale * sa * (dw(1) * ha + w(1) * dha);
@@ -322,21 +321,22 @@ void detail::generalized_force(const FlexibleBody& body, double theta, const Eig
 void detail::add_element_force(const FlexibleBody& body, int e, double theta, const Eigen::Ref<const Eigen::VectorXd>& q,
                                double scale, Eigen::Ref<Eigen::VectorXd> G, double d_theta, const Eigen::VectorXd* d_q,
                                Eigen::VectorXd* dG) {
-  add_force_with_rows(body, e, body.element_phi(e), body.element_slope(e), theta, q, scale, G, d_theta, d_q, dG);
+  add_force_with_rows(body, e, body.element_phi(e), body.element_slope(e), body.element_foreshortening(e), theta, q,
+                      scale, G, d_theta, d_q, dG);
 }
 
 detail::ElementRows::ElementRows(const FlexibleBody& body, const Eigen::MatrixXd& Psi) {
-  if (body.geometric_stiffening())
-    throw std::invalid_argument("element rows in other coordinates: not for a body with geometric stiffening");
   for (int e = 0; e < static_cast<int>(body.elements().size()); ++e) {
     phi.push_back(body.element_phi(e) * Psi);
     slope.push_back(body.element_slope(e) * Psi);
+    const Eigen::MatrixXd& Ha = body.element_foreshortening(e);
+    H.push_back(Ha.size() ? Eigen::MatrixXd(Psi.transpose() * Ha * Psi) : Eigen::MatrixXd());
   }
 }
 
 void detail::add_element_force(const FlexibleBody& body, const ElementRows& rows, int e, double theta,
                                const Eigen::Ref<const Eigen::VectorXd>& q, double scale, Eigen::Ref<Eigen::VectorXd> G) {
-  add_force_with_rows(body, e, rows.phi[e], rows.slope[e], theta, q, scale, G, 0.0, nullptr, nullptr);
+  add_force_with_rows(body, e, rows.phi[e], rows.slope[e], rows.H[e], theta, q, scale, G, 0.0, nullptr, nullptr);
 }
 
 void detail::generalized_force(const FlexibleBody& body, const ElementRows& rows, double theta,

@@ -13,9 +13,7 @@
 #include "planar.hpp"
 
 namespace freeflex {
-namespace {
-constexpr double kMinMassDeterminantRatio = 1e-3;  ///< of det 𝕄_b(q) / det 𝕄_b(0), stiffened model
-}  // namespace
+using detail::kMinMassDeterminantRatio;
 namespace {
 using planar::rot;
 const Eigen::Matrix2d& kJ = planar::J();

@@ -7,6 +7,11 @@
 
 namespace freeflex::detail {
 
+/// With geometric stiffening the kinetic energy is kept to second order in q: once
+/// det 𝕄_b(q) / det 𝕄_b(0) falls to this ratio the dropped higher-order terms are of the
+/// size of what is left, and the state is out of the model's range (FullModel::rhs).
+constexpr double kMinMassDeterminantRatio = 1e-3;
+
 /// FullModel::rhs (without geometric stiffening) through the kernel whose number of
 /// elastic coordinates is a run-time value, whatever the body's size, summing in the order
 /// FullModel::rhs takes for that size.

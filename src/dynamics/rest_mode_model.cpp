@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "dynamics/full_model_kernel.hpp"
 #include "util/vec4.hpp"
 
 namespace freeflex::detail {
@@ -14,10 +15,6 @@ using util::splat4;
 using util::store4;
 
 RestModeModel::RestModeModel(const FlexibleBody& body) : body_(body), n_(body.n()) {
-  if (body.geometric_stiffening())
-    throw std::invalid_argument(
-        "full_model_variables = rest_modes does not support geometric stiffening (its mass matrix changes in the "
-        "elastic entries too); use physical or modal");
   const RestModes modes = rest_modes(body);
   Psi_ = modes.Phi;
   Psi_inverse_ = Psi_.transpose() * modes.M_c;
@@ -26,28 +23,37 @@ RestModeModel::RestModeModel(const FlexibleBody& body) : body_(body), n_(body.n(
   const Eigen::Matrix3d A = M0.topLeftCorner<3, 3>();
   A_inverse_ = A.ldlt().solve(Eigen::Matrix3d::Identity());
   if (!M0.block(0, 3, 1, n_).isZero(0.0))
-    throw std::logic_error("rest-mode coordinates: the body-frame mass matrix couples x with q (eq. 6.1 has no such entry)");
+    throw std::logic_error("rest-mode coordinates: the body-frame mass matrix couples x with q at rest (eq. 6.1 has no such entry)");
   B_y_ = (M0.block(1, 3, 1, n_) * Psi_).transpose();
   B_theta_ = (M0.block(2, 3, 1, n_) * Psi_).transpose();
   S_o_ = body.integrals().S_o;
   const int N = 3 + n_;
-  // the Woodbury columns: 𝕄_η(0)⁻¹ e_x and 𝕄_η(0)⁻¹ e_θ from the block inverse
-  auto rest_solve = [&](const Eigen::Vector3d& g_r) {  // g_η = 0
-    const Eigen::Vector3d u = A_inverse_ * g_r;
-    Eigen::VectorXd y(N);
-    y.tail(n_) = -(B_y_ * u(1) + B_theta_ * u(2));
-    y.head<3>() = u - A_inverse_ * Eigen::Vector3d(0.0, B_y_.dot(y.tail(n_)), B_theta_.dot(y.tail(n_)));
-    return y;
-  };
-  W_x_ = rest_solve(Eigen::Vector3d::UnitX());
-  W_theta_ = rest_solve(Eigen::Vector3d::UnitZ());
+  // the Woodbury columns 𝕄_η(0)⁻¹ e_x, e_y, e_θ
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(N, 3);
+  W_x_.resize(N);
+  W_y_.resize(N);
+  W_theta_.resize(N);
+  rest_solve(I.col(0), W_x_);
+  rest_solve(I.col(1), W_y_);
+  rest_solve(I.col(2), W_theta_);
   if (body.damped()) {
     Eigen::MatrixXd S = Eigen::MatrixXd::Zero(N, N);
     S.topLeftCorner<3, 3>().setIdentity();
     S.bottomRightCorner(n_, n_) = Psi_;
     D_ = S.transpose() * body.damping() * S;
   }
+  if (body.geometric_stiffening()) {
+    H_ = Psi_.transpose() * body.integrals().H_bar * Psi_;
+    G_c_ = Psi_.transpose() * body.integrals().G_c * Psi_;
+  }
   rows_ = ElementRows(body, Psi_);
+}
+
+void RestModeModel::rest_solve(const Eigen::Ref<const Eigen::VectorXd>& g, Eigen::Ref<Eigen::VectorXd> y) const {
+  // u = A⁻¹ g_r; y_η = g_η − Bᵀ u; y_r = u − A⁻¹ B y_η (B's x row is zero)
+  const Eigen::Vector3d u = A_inverse_ * g.head<3>();
+  y.tail(n_) = g.tail(n_) - (B_y_ * u(1) + B_theta_ * u(2));
+  y.head<3>() = u - A_inverse_ * Eigen::Vector3d(0.0, B_y_.dot(y.tail(n_)), B_theta_.dot(y.tail(n_)));
 }
 
 RestModeModel::Data RestModeModel::create_data() const {
@@ -57,6 +63,12 @@ RestModeModel::Data RestModeModel::create_data() const {
   d.G.resize(N);
   d.g.resize(N);
   d.Dzd.resize(N);
+  if (body_.geometric_stiffening()) {
+    d.Hq.resize(n_);
+    d.Hqd.resize(n_);
+    d.Mq.resize(n_);
+    d.Wv.resize(N);
+  }
   return d;
 }
 
@@ -197,7 +209,72 @@ bool rest_mode_rhs(const RestModeModel& m, RestModeModel::Data& d, const double*
 
 bool RestModeModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& y,
                         const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  if (body_.geometric_stiffening()) return rhs_stiffened(d, y, commands);
   return rest_mode_rhs(*this, d, y.data(), commands);
+}
+
+bool RestModeModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                  const Eigen::Ref<const Eigen::VectorXd>& commands) const {
+  // FullModel::rhs_stiffened term by term, with Ψᵀ (M − G_c) Ψ η = η + Bᵀ A⁻¹ B η − G̃_c η,
+  // Ψᵀ K Ψ η = Λ η and the solves with 𝕄_η(0) by its block inverse
+  const int N = 3 + n_, n = n_;
+  const auto eta = x.segment(3, n);
+  const auto etad = x.segment(N + 3, n);
+  const double th = x(2), thd = x(N + 2), thd2 = thd * thd;
+  const double c = std::cos(th), s = std::sin(th);
+  generalized_force(th, eta, commands, d.G);  // R rows in inertial axes
+  d.Hq.noalias() = H_ * eta;
+  d.Hqd.noalias() = H_ * etad;
+  const double Pq = B_y_.dot(eta), Pqd = B_y_.dot(etad);
+  const Eigen::Vector3d a = A_inverse_ * Eigen::Vector3d(0.0, Pq, B_theta_.dot(eta));
+  d.Mq.noalias() = eta + B_y_ * a(1) + B_theta_ * a(2) - G_c_ * eta;  // Ψᵀ (M − G_c) q
+  const double qHq = eta.dot(d.Hq), qdHq = etad.dot(d.Hq), qdHqd = etad.dot(d.Hqd);
+  const double sx = S_o_ - 0.5 * qHq, sy = Pq;
+  const double qMq = eta.dot(d.Mq), qMqd = etad.dot(d.Mq);
+  Eigen::VectorXd& g = d.g;
+  const double* G = d.G.data();
+  g(0) = c * G[0] + s * G[1] + thd2 * sx + 2.0 * thd * Pqd + qdHqd;
+  g(1) = -s * G[0] + c * G[1] + thd2 * sy + 2.0 * thd * qdHq;
+  g(2) = G[2] - 2.0 * thd * qMqd;
+  g.tail(n) = d.G.tail(n) + thd2 * d.Mq - lambda_.cwiseProduct(eta);
+  if (body_.damped()) {
+    d.Dzd.noalias() = D_ * x.tail(N);
+    g(0) -= c * d.Dzd(0) + s * d.Dzd(1);
+    g(1) -= -s * d.Dzd(0) + c * d.Dzd(1);
+    g.tail(N - 2) -= d.Dzd.tail(N - 2);
+  }
+  // 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_y, e_θ, v], v = [0; 0; 0; H̄q] (eq. 14.5)
+  auto w = d.y_dot.tail(N);
+  rest_solve(g, w);
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(N);
+  v.tail(n) = d.Hq;
+  rest_solve(v, d.Wv);
+  Eigen::Matrix<double, Eigen::Dynamic, 4> WU(N, 4);
+  WU.col(0) = W_x_;
+  WU.col(1) = W_y_;
+  WU.col(2) = W_theta_;
+  WU.col(3) = d.Wv;
+  Eigen::Matrix4d UWU;
+  UWU.topLeftCorner<3, 3>() = WU.topLeftCorner<3, 3>();
+  UWU.block<3, 1>(0, 3) = d.Wv.head<3>();
+  UWU.block<1, 3>(3, 0) = d.Wv.head<3>().transpose();
+  UWU(3, 3) = d.Hq.dot(d.Wv.tail(n));
+  Eigen::Matrix4d S = Eigen::Matrix4d::Zero();
+  S(0, 2) = S(2, 0) = -Pq;
+  S(1, 2) = S(2, 1) = -0.5 * qHq;
+  S(2, 2) = qMq;
+  S(0, 3) = S(3, 0) = -1.0;
+  const Eigen::Matrix4d core = Eigen::Matrix4d::Identity() + UWU * S;
+  const double det = core.determinant();  // det 𝕄_b(q) / det 𝕄_b(0), as FullModel::rhs_stiffened
+  if (!(det > detail::kMinMassDeterminantRatio)) return false;
+  const Eigen::Vector4d Uy(w(0), w(1), w(2), d.Hq.dot(w.tail(n)));
+  const Eigen::Vector4d zc = S * core.partialPivLu().solve(Uy);
+  w.noalias() -= WU * zc;
+  const double wx = w(0), wy = w(1);
+  w(0) = c * wx - s * wy;
+  w(1) = s * wx + c * wy;
+  d.y_dot.head(N) = x.tail(N);
+  return true;
 }
 
 }  // namespace freeflex::detail

@@ -11,7 +11,9 @@
 // whose inverse is [[A⁻¹ + A⁻¹ B Bᵀ A⁻¹, −A⁻¹ B], [−Bᵀ A⁻¹, I]] (the Schur complement of A
 // is the identity), and Ψᵀ M Ψ = I + Bᵀ A⁻¹ B. So M q, K q and the solve with 𝕄_b(0),
 // dense n x n and (3+n) x (3+n) products in physical coordinates, become a few products
-// with the 3 x n matrix B: the right-hand side's cost grows as n, not n². Private to src/.
+// with the 3 x n matrix B: the right-hand side's cost grows as n, not n². With geometric
+// stiffening (eq. 14.5-14.6) three dense products remain, H̄ q, H̄ q' and G_c q in these
+// coordinates, against seven in physical ones. Private to src/.
 #include <vector>
 
 #include <Eigen/Dense>
@@ -26,11 +28,10 @@ class RestModeModel {
   /// Workspace of one thread of evaluation: y' of the last rhs() and scratch.
   struct Data {
     Eigen::VectorXd y_dot, G, g, Dzd;
+    Eigen::VectorXd Hq, Hqd, Mq, Wv;  // scratch of the stiffened model
   };
 
-  /// Throws std::invalid_argument for a body with geometric stiffening (its mass matrix
-  /// changes in more than the rigid entries; not supported in these coordinates), and
-  /// std::runtime_error when the modes at rest cannot be computed.
+  /// Throws std::runtime_error when the modes at rest cannot be computed.
   explicit RestModeModel(const FlexibleBody& body);
   const FlexibleBody& body() const { return body_; }
   int n() const { return n_; }
@@ -44,7 +45,7 @@ class RestModeModel {
   void to_physical(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> x) const;
 
   /// y' for y under element commands u, into data.y_dot; false where the mass matrix is
-  /// not positive definite (as FullModel::rhs).
+  /// not positive definite, or with geometric stiffening near singular (as FullModel::rhs).
   bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 
   /// The generalized force in these coordinates, [F (inertial axes); M_o; Ψᵀ Q], into G
@@ -63,11 +64,17 @@ class RestModeModel {
   Eigen::Matrix3d A_inverse_;    ///< 𝕄_rr⁻¹ at rest
   /// The y and θ rows of B = 𝕄_rq Ψ, Φ̄ Ψ and Φ̃ Ψ (its x row is zero: 𝕄_rq = [0; Φ̄; Φ̃])
   Eigen::VectorXd B_y_, B_theta_;
-  Eigen::VectorXd W_x_, W_theta_;  ///< the x and θ columns of 𝕄_η(0)⁻¹ (Woodbury)
+  Eigen::VectorXd W_x_, W_y_, W_theta_;  ///< the x, y and θ columns of 𝕄_η(0)⁻¹ (Woodbury)
+  Eigen::MatrixXd H_, G_c_;              ///< Ψᵀ H̄ Ψ and Ψᵀ G_c Ψ (geometric stiffening only)
   Eigen::MatrixXd D_;              ///< damping in these coordinates (empty when undamped)
   ElementRows rows_;               ///< Φ(x_e) Ψ, Φ'(x_e) Ψ
   double S_o_;
 
+  /// y = 𝕄_η(0)⁻¹ g by the block inverse.
+  void rest_solve(const Eigen::Ref<const Eigen::VectorXd>& g, Eigen::Ref<Eigen::VectorXd> y) const;
+  /// rhs() with geometric stiffening (FullModel::rhs_stiffened in these coordinates).
+  bool rhs_stiffened(Data& data, const Eigen::Ref<const Eigen::VectorXd>& y,
+                     const Eigen::Ref<const Eigen::VectorXd>& commands) const;
   friend bool rest_mode_rhs(const RestModeModel& m, Data& d, const double* x,
                             const Eigen::Ref<const Eigen::VectorXd>& commands);
 };

@@ -49,13 +49,6 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
   st.perturbation = s.boolean("perturbation", false).value_or(st.perturbation);
   st.error_estimate = s.boolean("error_estimate", false).value_or(st.error_estimate);
   st.compare_stiffening = s.boolean("compare_stiffening", false).value_or(st.compare_stiffening);
-  if (o.full_variables == SimulationOptions::Variables::RestModes && (d.geometric_stiffening || st.compare_stiffening))
-    s.problem("full_model_variables",
-              s.key_path("full_model_variables") + " = \"rest_modes\" does not support geometric stiffening (" +
-                  (d.geometric_stiffening ? "[model] geometric_stiffening is true, its default"
-                                          : "compare_stiffening = true reruns the model with it") +
-                  "): its mass matrix changes in the elastic entries too; expected \"physical\" or \"modal\", "
-                  "or geometric_stiffening = false");
   if (dur) report_field_problems(s, problems(o), {{"duration_s", "duration_s"},
                                                   {"first_order_variables", "first_order_variables"},
                                                   {"output_step_s", "output_step_s"},

@@ -137,10 +137,8 @@ TEST_CASE("enum names are the spellings design files take", "[api][io]") {
     CHECK(d.simulation->options.integrator.method == value);
   }
   for (const auto& [value, name] : EnumNames<SimulationOptions::Variables>::names) {
-    // rest_modes: the full model's only, and without geometric stiffening (on by default)
-    const bool rest = value == SimulationOptions::Variables::RestModes;
-    const Design d = parse_design((rest ? kBeam + "[model]\ngeometric_stiffening = false\n" : kBeam) + simulation +
-                                      "full_model_variables = \"" + name + "\"\n" +
+    const bool rest = value == SimulationOptions::Variables::RestModes;  // the full model's only
+    const Design d = parse_design(kBeam + simulation + "full_model_variables = \"" + name + "\"\n" +
                                       (rest ? "" : "first_order_variables = \"" + std::string(name) + "\"\n"),
                                   "t.toml");
     CHECK(d.simulation->options.full_variables == value);

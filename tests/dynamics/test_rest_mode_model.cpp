@@ -22,8 +22,9 @@ TEST_CASE("rest-mode coordinates: the map is one to one and the derivatives are 
   // element types commanded at once, at random states with large rates and deflections.
   // y' mapped back must equal x' of FullModel::rhs at x = map(y): the map is constant and
   // linear, so it carries derivatives as it carries states.
-  for (int n : {4, 7, 20}) {
-    const FlexibleBody body = rich_body(n, {0.02, 0.01, 0.03});
+  for (int n : {4, 7, 20})
+  for (bool stiffening : {false, true}) {
+    const FlexibleBody body = rich_body(n, {0.02, 0.01, 0.03}, stiffening);
     const FullModel physical(body);
     const detail::RestModeModel rest(body);
     FullModel::Data dp = physical.create_data();
@@ -32,6 +33,7 @@ TEST_CASE("rest-mode coordinates: the map is one to one and the derivatives are 
     std::mt19937 gen(11 + n);
     std::uniform_real_distribution<double> U(-1.0, 1.0);
     double worst = 0.0, worst_map = 0.0;
+    int compared = 0;
     for (int trial = 0; trial < 100; ++trial) {
       Eigen::VectorXd x(2 * N), u(body.elements().size());
       for (int i = 0; i < 2 * N; ++i) x(i) = U(gen) * (i < 3 || (i >= N && i < N + 3) ? 3.0 : 0.05);
@@ -40,21 +42,30 @@ TEST_CASE("rest-mode coordinates: the map is one to one and the derivatives are 
       Eigen::VectorXd back(2 * N), yd_phys(2 * N);
       rest.to_physical(y, back);
       worst_map = std::max(worst_map, (back - x).cwiseAbs().maxCoeff() / x.cwiseAbs().maxCoeff());
-      REQUIRE(physical.rhs(dp, x, u));
-      REQUIRE(rest.rhs(dr, y, u));
+      // the stiffened model leaves its range where 𝕄_b(q) has lost most of its determinant
+      // at rest (FullModel::rhs): both coordinates must say so at the same states
+      const bool in_range = physical.rhs(dp, x, u);
+      CHECK(rest.rhs(dr, y, u) == in_range);
+      if (!in_range) continue;
+      ++compared;
       rest.to_physical(dr.y_dot, yd_phys);
       worst = std::max(worst, (yd_phys - dp.x_dot).cwiseAbs().maxCoeff() / dp.x_dot.cwiseAbs().maxCoeff());
     }
-    WARN("n = " << n << ": map " << worst_map << ", derivatives " << worst);
+    INFO("n = " << n << ", geometric stiffening " << stiffening << ": map " << worst_map << ", derivatives " << worst
+                 << " (" << compared << " states in range)");
     // Ψ comes from a generalized eigensolver, so the block inverse and Ψᵀ K Ψ = Λ hold to
-    // round-off: seen 2e-16 for the map and 3e-15 to 8e-15 for the derivatives (n = 4-20)
+    // round-off: seen 2e-16 for the map and 3e-15 to 8e-15 for the derivatives (n = 4-20,
+    // with and without stiffening)
+    CHECK(compared >= 50);  // most random states are in range
     CHECK(worst_map < 1e-14);
-    CHECK(worst < 1e-13);
+    // stiffened: the 4 x 4 Woodbury core near its determinant limit (1e-3) magnifies the
+    // round-off, seen 1e-14 to 1.7e-13
+    CHECK(worst < (stiffening ? 1e-12 : 1e-13));
   }
 }
 
 TEST_CASE("rest-mode coordinates: the generalized force and damping carry the same power", "[dynamics]") {
-  const FlexibleBody body = rich_body(6, {0.05, 0.02});
+  const FlexibleBody body = rich_body(6, {0.05, 0.02}, GENERATE(false, true));
   const detail::RestModeModel rest(body);
   const int N = body.dofs();
   std::mt19937 gen(3);
@@ -73,9 +84,4 @@ TEST_CASE("rest-mode coordinates: the generalized force and damping carry the sa
     CHECK(yd.dot(Gy) == Approx(power).margin(1e-12));  // round-off of sums of O(1) terms
     CHECK(yd.dot(rest.damping() * yd) == Approx(damping).margin(1e-12));
   }
-}
-
-TEST_CASE("rest-mode coordinates refuse geometric stiffening", "[dynamics]") {
-  CHECK_THROWS_WITH(detail::RestModeModel(rich_body(4, {}, true)), Catch::Contains("rest_modes") &&
-                                                                          Catch::Contains("geometric stiffening"));
 }

@@ -112,18 +112,12 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
   CHECK_FALSE(swapped.simulation->error_estimate);
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nerror_estimate = 1\n"),
              Contains("error_estimate"));
-  // rest-mode coordinates: the full model's, and not with geometric stiffening (on by default)
-  const std::string unstiffened = kPaperBeam + "[model]\ngeometric_stiffening = false\n" + kLoad;
+  // rest-mode coordinates: the full model's, with or without geometric stiffening
   const Design rest =
-      parse_design(unstiffened + "[simulation]\nduration_s = 2.0\nfull_model_variables = \"rest_modes\"\n", "t.toml");
+      parse_design(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nfull_model_variables = \"rest_modes\"\n", "t.toml");
   CHECK(rest.simulation->options.full_variables == SimulationOptions::Variables::RestModes);
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nfirst_order_variables = \"rest_modes\"\n"),
              Contains("line 16") && Contains("first_order_variables") && Contains("expected physical or modal"));
-  CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nfull_model_variables = \"rest_modes\"\n"),
-             Contains("full_model_variables") && Contains("geometric_stiffening is true"));
-  CHECK_THAT(problems_of(unstiffened +
-                         "[simulation]\nduration_s = 2.0\nfull_model_variables = \"rest_modes\"\ncompare_stiffening = true\n"),
-             Contains("full_model_variables") && Contains("compare_stiffening"));
   // the first-order solver: the integrator unless asked; "taylor" not with a prescribed motion
   CHECK(d.simulation->options.first_order_solver == SimulationOptions::FirstOrderSolver::Integrator);
   const Design taylor = parse_design(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nfirst_order_solver = \"taylor\"\n",
