@@ -2,6 +2,7 @@
 #include "dynamics/rest_mode_model.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include "dynamics/full_model_kernel.hpp"
@@ -16,9 +17,13 @@ using util::store4;
 
 RestModeModel::RestModeModel(const FlexibleBody& body) : body_(body), n_(body.n()) {
   const RestModes modes = rest_modes(body);
-  Psi_ = modes.Phi;
-  Psi_inverse_ = Psi_.transpose() * modes.M_c;
-  lambda_ = modes.omega2;
+  // Ψ scaled to Ψᵀ M_c Ψ = μ I with μ the mean diagonal of M, so that η is of the size of
+  // q (for M = μ I and no rigid coupling, Ψ would be orthogonal) and the integrator's
+  // tolerances mean in η what they mean in q, whatever the beam's mass
+  mu_ = body.integrals().M.trace() / n_;
+  Psi_ = modes.Phi * std::sqrt(mu_);
+  Psi_inverse_ = Psi_.transpose() * modes.M_c / mu_;
+  L_ = mu_ * modes.omega2;
   const Eigen::MatrixXd M0 = body.mass_matrix(0.0, Eigen::VectorXd::Zero(n_));
   const Eigen::Matrix3d A = M0.topLeftCorner<3, 3>();
   A_inverse_ = A.ldlt().solve(Eigen::Matrix3d::Identity());
@@ -41,6 +46,14 @@ RestModeModel::RestModeModel(const FlexibleBody& body) : body_(body), n_(body.n(
     S.topLeftCorner<3, 3>().setIdentity();
     S.bottomRightCorner(n_, n_) = Psi_;
     D_ = S.transpose() * body.damping() * S;
+    // The modal damping (eq. 6.5) is diagonal in the modes at rest and leaves the rigid
+    // rows alone, to round-off; then the kernel applies its diagonal. (Two modes of one
+    // frequency with different ratios could come out of the two eigensolvers rotated
+    // against each other: the full product then.)
+    const Eigen::VectorXd dd = D_.diagonal().tail(n_);
+    Eigen::MatrixXd off = D_;
+    off.diagonal().tail(n_).setZero();
+    if (off.cwiseAbs().maxCoeff() <= 1e-10 * dd.cwiseAbs().maxCoeff()) damping_diagonal_ = dd;
   }
   if (body.geometric_stiffening()) {
     H_ = Psi_.transpose() * body.integrals().H_bar * Psi_;
@@ -50,10 +63,16 @@ RestModeModel::RestModeModel(const FlexibleBody& body) : body_(body), n_(body.n(
 }
 
 void RestModeModel::rest_solve(const Eigen::Ref<const Eigen::VectorXd>& g, Eigen::Ref<Eigen::VectorXd> y) const {
-  // u = A⁻¹ g_r; y_η = g_η − Bᵀ u; y_r = u − A⁻¹ B y_η (B's x row is zero)
+  // u = A⁻¹ g_r; y_η = (g_η − Bᵀ u) / μ; y_r = u − A⁻¹ B y_η (B's x row is zero)
   const Eigen::Vector3d u = A_inverse_ * g.head<3>();
-  y.tail(n_) = g.tail(n_) - (B_y_ * u(1) + B_theta_ * u(2));
+  y.tail(n_) = (g.tail(n_) - (B_y_ * u(1) + B_theta_ * u(2))) * (1.0 / mu_);
   y.head<3>() = u - A_inverse_ * Eigen::Vector3d(0.0, B_y_.dot(y.tail(n_)), B_theta_.dot(y.tail(n_)));
+}
+
+double RestModeModel::damping_power(const Eigen::Ref<const Eigen::VectorXd>& y_dot_z) const {
+  if (!body_.damped()) return 0.0;
+  if (damping_diagonal_.size()) return y_dot_z.tail(n_).dot(damping_diagonal_.cwiseProduct(y_dot_z.tail(n_)));
+  return y_dot_z.dot(D_ * y_dot_z);
 }
 
 RestModeModel::Data RestModeModel::create_data() const {
@@ -95,13 +114,23 @@ void RestModeModel::generalized_force(double theta, const Eigen::Ref<const Eigen
 
 namespace {
 
+/// What rest_mode_kernel reads besides the state.
+struct KernelData {
+  int n;
+  const double* G;   ///< generalized force, R rows inertial
+  const double* d;   ///< the diagonal of the elastic damping, or null
+  const double* Dz;  ///< D ż with a damping that is not diagonal, or null
+  const double *By, *Bt, *L, *Wx, *Wt, *Ai;  ///< B's y and θ rows, μΛ, Woodbury columns, A⁻¹ (column-major)
+  double mu, S_o;
+};
+
 /// The arithmetic of rhs() on raw arrays, in three passes over the n elastic entries, four
 /// at a time (fixed lanes, so the same bits in every variant: this file is built without
-/// fused multiply-adds). G: the generalized force (R rows inertial), Dz: D ż or null.
-FREEFLEX_AVX2_CLONES bool rest_mode_kernel(int n, const double* x, const double* G, const double* Dz, const double* By,
-                                          const double* Bt, const double* L, const double* Wx, const double* Wt,
-                                          const double* Ai, double S_o, double* out) {
-  const int N = 3 + n;
+/// fused multiply-adds).
+FREEFLEX_AVX2_CLONES bool rest_mode_kernel(const KernelData& k, const double* x, double* out) {
+  const int n = k.n, N = 3 + n;
+  const double *G = k.G, *By = k.By, *Bt = k.Bt, *L = k.L, *Ai = k.Ai, *dg = k.d, *Dz = k.Dz;
+  const double mu = k.mu;
   const double* z = x;
   const double* zd = x + N;
   const double* eta = z + 3;
@@ -130,41 +159,44 @@ FREEFLEX_AVX2_CLONES bool rest_mode_kernel(int n, const double* x, const double*
     ee += eta[i] * eta[i];
     eed += eta[i] * etad[i];
   }
-  // Ψᵀ M q = η + Bᵀ a with a = A⁻¹ b (b_x = 0); qᵀ M q = ηᵀη + bᵀ a; qᵀ M q' = ηᵀη' + b'ᵀ a
-  // (Ai: A⁻¹ column-major)
+  // Ψᵀ M q = μ η + Bᵀ a with a = A⁻¹ b (b_x = 0); qᵀ M q = μ ηᵀη + bᵀ a; qᵀ M q' = μ ηᵀη' + b'ᵀ a
   const double ay = Ai[4] * b1 + Ai[7] * b2, at = Ai[5] * b1 + Ai[8] * b2;  // a_x enters nothing
-  const double qMq = ee + (b1 * ay + b2 * at), qMqd = eed + (bd1 * ay + bd2 * at);
+  const double qMq = mu * ee + (b1 * ay + b2 * at), qMqd = mu * eed + (bd1 * ay + bd2 * at);
   const double Pq = b1, Pqd = bd1;  // B's y row is Φ̄ Ψ
   // 2. g = Tᵀ (G − h − K q − D z') as FullModel::rhs, the elastic rows projected on Ψ, and
-  // y = 𝕄_η(0)⁻¹ g by the block inverse: u = A⁻¹ g_r, y_η = g_η − Bᵀ u, y_r = u − A⁻¹ B y_η
-  double gr0 = c * G[0] + s * G[1] + thd2 * S_o + 2.0 * thd * Pqd;
+  // y = 𝕄_η(0)⁻¹ g by the block inverse: u = A⁻¹ g_r, y_η = (g_η − Bᵀ u) / μ, y_r = u − A⁻¹ B y_η
+  double gr0 = c * G[0] + s * G[1] + thd2 * k.S_o + 2.0 * thd * Pqd;
   double gr1 = -s * G[0] + c * G[1] + thd2 * Pq;
   double gr2 = G[2] - 2.0 * thd * qMqd;
-  if (Dz) {
+  if (Dz) {  // a damping that is not diagonal (the diagonal one leaves the rigid rows alone)
     gr0 -= c * Dz[0] + s * Dz[1];
     gr1 -= -s * Dz[0] + c * Dz[1];
     gr2 -= Dz[2];
   }
   const double u0 = Ai[0] * gr0 + Ai[3] * gr1 + Ai[6] * gr2, u1 = Ai[1] * gr0 + Ai[4] * gr1 + Ai[7] * gr2,
                u2 = Ai[2] * gr0 + Ai[5] * gr1 + Ai[8] * gr2;
-  // y_η,i = G_i + (θ'² − λ_i) η_i + B_y,i (θ'² a_y − u_y) + B_θ,i (θ'² a_θ − u_θ) − (D ż)_i
-  const double cy = thd2 * ay - u1, ct = thd2 * at - u2;
+  // μ y_η,i = G_i + (θ'² μ − μλ_i) η_i + B_y,i (θ'² a_y − u_y) + B_θ,i (θ'² a_θ − u_θ) − (D ż)_i
+  const double cy = thd2 * ay - u1, ct = thd2 * at - u2, cm = thd2 * mu, inv_mu = 1.0 / mu;
   double* w = out + N;  // z'' (body axes until the end)
   V4 sy = splat4(0.0), st = sy;
-  const V4 vthd2 = splat4(thd2), vcy = splat4(cy), vct = splat4(ct);
+  const V4 vcm = splat4(cm), vcy = splat4(cy), vct = splat4(ct), vinv = splat4(inv_mu);
   i = 0;
   for (; i + 4 <= n; i += 4) {
     const V4 y = load4(By + i), t = load4(Bt + i);
-    V4 v = load4(G + 3 + i) + (vthd2 - load4(L + i)) * load4(eta + i) + (y * vcy + t * vct);
+    V4 v = load4(G + 3 + i) + (vcm - load4(L + i)) * load4(eta + i) + (y * vcy + t * vct);
+    if (dg) v = v - load4(dg + i) * load4(etad + i);
     if (Dz) v = v - load4(Dz + 3 + i);
+    v = v * vinv;
     store4(w + 3 + i, v);
     sy += y * v;
     st += t * v;
   }
   double By_y = util::lane_sum(sy), Bt_y = util::lane_sum(st);
   for (; i < n; ++i) {
-    double v = G[3 + i] + (thd2 - L[i]) * eta[i] + (By[i] * cy + Bt[i] * ct);
+    double v = G[3 + i] + (cm - L[i]) * eta[i] + (By[i] * cy + Bt[i] * ct);
+    if (dg) v -= dg[i] * etad[i];
     if (Dz) v -= Dz[3 + i];
+    v *= inv_mu;
     w[3 + i] = v;
     By_y += By[i] * v;
     Bt_y += Bt[i] * v;
@@ -174,6 +206,8 @@ FREEFLEX_AVX2_CLONES bool rest_mode_kernel(int n, const double* x, const double*
   w[2] = u2 - (Ai[5] * By_y + Ai[8] * Bt_y);
   // 3. 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_θ], S = [[0, −Φ̄q], [−Φ̄q, qᵀMq]]: the rigid
   // entries only, the same in any elastic coordinates (FullModel::rhs), by Woodbury
+  const double* Wx = k.Wx;
+  const double* Wt = k.Wt;
   const double aa = -Pq, cc = qMq;
   const double W00 = Wx[0], W01 = Wt[0], W20 = Wx[2], W21 = Wt[2];
   const double k00 = 1.0 + W01 * aa, k01 = W00 * aa + W01 * cc, k10 = W21 * aa, k11 = 1.0 + W20 * aa + W21 * cc;
@@ -188,7 +222,7 @@ FREEFLEX_AVX2_CLONES bool rest_mode_kernel(int n, const double* x, const double*
   const double wx = w[0], wy = w[1];
   w[0] = c * wx - s * wy;
   w[1] = s * wx + c * wy;
-  for (i = 0; i < N; ++i) out[i] = zd[i];
+  std::memcpy(out, zd, sizeof(double) * N);
   return true;
 }
 
@@ -198,13 +232,15 @@ bool rest_mode_rhs(const RestModeModel& m, RestModeModel::Data& d, const double*
                    const Eigen::Ref<const Eigen::VectorXd>& commands) {
   const int n = m.n_, N = 3 + n;
   m.generalized_force(x[2], Eigen::Map<const Eigen::VectorXd>(x + 3, n), commands, d.G);
-  const double* Dz = nullptr;
-  if (m.body_.damped()) {
+  KernelData k{n,       d.G.data(),          nullptr,         nullptr,     m.B_y_.data(), m.B_theta_.data(),
+               m.L_.data(), m.W_x_.data(), m.W_theta_.data(), m.A_inverse_.data(), m.mu_, m.S_o_};
+  if (m.damping_diagonal_.size()) {
+    k.d = m.damping_diagonal_.data();
+  } else if (m.body_.damped()) {
     d.Dzd.noalias() = m.D_ * Eigen::Map<const Eigen::VectorXd>(x + N, N);
-    Dz = d.Dzd.data();
+    k.Dz = d.Dzd.data();
   }
-  return rest_mode_kernel(n, x, d.G.data(), Dz, m.B_y_.data(), m.B_theta_.data(), m.lambda_.data(), m.W_x_.data(),
-                          m.W_theta_.data(), m.A_inverse_.data(), m.S_o_, d.y_dot.data());
+  return rest_mode_kernel(k, x, d.y_dot.data());
 }
 
 bool RestModeModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -215,8 +251,8 @@ bool RestModeModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& y,
 
 bool RestModeModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& x,
                                   const Eigen::Ref<const Eigen::VectorXd>& commands) const {
-  // FullModel::rhs_stiffened term by term, with Ψᵀ (M − G_c) Ψ η = η + Bᵀ A⁻¹ B η − G̃_c η,
-  // Ψᵀ K Ψ η = Λ η and the solves with 𝕄_η(0) by its block inverse
+  // FullModel::rhs_stiffened term by term, with Ψᵀ (M − G_c) Ψ η = μ η + Bᵀ A⁻¹ B η − G̃_c η,
+  // Ψᵀ K Ψ η = μ Λ η and the solves with 𝕄_η(0) by its block inverse
   const int N = 3 + n_, n = n_;
   const auto eta = x.segment(3, n);
   const auto etad = x.segment(N + 3, n);
@@ -227,7 +263,7 @@ bool RestModeModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorX
   d.Hqd.noalias() = H_ * etad;
   const double Pq = B_y_.dot(eta), Pqd = B_y_.dot(etad);
   const Eigen::Vector3d a = A_inverse_ * Eigen::Vector3d(0.0, Pq, B_theta_.dot(eta));
-  d.Mq.noalias() = eta + B_y_ * a(1) + B_theta_ * a(2) - G_c_ * eta;  // Ψᵀ (M − G_c) q
+  d.Mq.noalias() = mu_ * eta + B_y_ * a(1) + B_theta_ * a(2) - G_c_ * eta;  // Ψᵀ (M − G_c) q
   const double qHq = eta.dot(d.Hq), qdHq = etad.dot(d.Hq), qdHqd = etad.dot(d.Hqd);
   const double sx = S_o_ - 0.5 * qHq, sy = Pq;
   const double qMq = eta.dot(d.Mq), qMqd = etad.dot(d.Mq);
@@ -236,8 +272,10 @@ bool RestModeModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorX
   g(0) = c * G[0] + s * G[1] + thd2 * sx + 2.0 * thd * Pqd + qdHqd;
   g(1) = -s * G[0] + c * G[1] + thd2 * sy + 2.0 * thd * qdHq;
   g(2) = G[2] - 2.0 * thd * qMqd;
-  g.tail(n) = d.G.tail(n) + thd2 * d.Mq - lambda_.cwiseProduct(eta);
-  if (body_.damped()) {
+  g.tail(n) = d.G.tail(n) + thd2 * d.Mq - L_.cwiseProduct(eta);
+  if (damping_diagonal_.size()) {
+    g.tail(n) -= damping_diagonal_.cwiseProduct(etad);
+  } else if (body_.damped()) {
     d.Dzd.noalias() = D_ * x.tail(N);
     g(0) -= c * d.Dzd(0) + s * d.Dzd(1);
     g(1) -= -s * d.Dzd(0) + c * d.Dzd(1);

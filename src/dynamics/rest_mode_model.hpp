@@ -9,7 +9,9 @@
 //     𝕄_η(0) = [[A, B], [Bᵀ, I + Bᵀ A⁻¹ B]],   A = 𝕄_rr (3 x 3), B = 𝕄_rq Ψ (3 x n),
 //
 // whose inverse is [[A⁻¹ + A⁻¹ B Bᵀ A⁻¹, −A⁻¹ B], [−Bᵀ A⁻¹, I]] (the Schur complement of A
-// is the identity), and Ψᵀ M Ψ = I + Bᵀ A⁻¹ B. So M q, K q and the solve with 𝕄_b(0),
+// is the identity), and Ψᵀ M Ψ = I + Bᵀ A⁻¹ B. (The code scales Ψ to Ψᵀ M_c Ψ = μ I, μ the
+// mean diagonal of M, so that η is of the size of q and the tolerances mean the same in
+// both; then μ I takes the place of I above.) So M q, K q and the solve with 𝕄_b(0),
 // dense n x n and (3+n) x (3+n) products in physical coordinates, become a few products
 // with the 3 x n matrix B: the right-hand side's cost grows as n, not n². With geometric
 // stiffening (eq. 14.5-14.6) three dense products remain, H̄ q, H̄ q' and G_c q in these
@@ -54,19 +56,24 @@ class RestModeModel {
                          const Eigen::Ref<const Eigen::VectorXd>& commands, Eigen::Ref<Eigen::VectorXd> G) const;
   /// The modal damping in these coordinates, Sᵀ D S with S = blockdiag(I₃, Ψ).
   const Eigen::MatrixXd& damping() const { return D_; }
+  /// ż_yᵀ D ż_y for the rates ż_y = [R', θ', η'] (the damping's power, the same in either
+  /// coordinates): n products where the damping is diagonal in the modes, as the modal one is.
+  double damping_power(const Eigen::Ref<const Eigen::VectorXd>& rates) const;
 
  private:
   const FlexibleBody& body_;
   int n_;
   Eigen::MatrixXd Psi_;          ///< q = Ψ η
   Eigen::MatrixXd Psi_inverse_;  ///< Ψ⁻¹ = Ψᵀ M_c
-  Eigen::VectorXd lambda_;       ///< ω², the diagonal of Ψᵀ K Ψ
+  double mu_;                    ///< Ψᵀ M_c Ψ = μ I: the mean diagonal of M
+  Eigen::VectorXd L_;            ///< μ ω², the diagonal of Ψᵀ K Ψ
   Eigen::Matrix3d A_inverse_;    ///< 𝕄_rr⁻¹ at rest
   /// The y and θ rows of B = 𝕄_rq Ψ, Φ̄ Ψ and Φ̃ Ψ (its x row is zero: 𝕄_rq = [0; Φ̄; Φ̃])
   Eigen::VectorXd B_y_, B_theta_;
   Eigen::VectorXd W_x_, W_y_, W_theta_;  ///< the x, y and θ columns of 𝕄_η(0)⁻¹ (Woodbury)
   Eigen::MatrixXd H_, G_c_;              ///< Ψᵀ H̄ Ψ and Ψᵀ G_c Ψ (geometric stiffening only)
   Eigen::MatrixXd D_;              ///< damping in these coordinates (empty when undamped)
+  Eigen::VectorXd damping_diagonal_;  ///< its elastic diagonal when it is diagonal (the modal damping is)
   ElementRows rows_;               ///< Φ(x_e) Ψ, Φ'(x_e) Ψ
   double S_o_;
 

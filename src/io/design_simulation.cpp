@@ -45,6 +45,10 @@ void read_simulation(Section& root, Design& d, Outputs& outputs) {
                                         " = \"taylor\" integrates the perturbation solution about a free or optimized "
                                         "motion; a prescribed [motion] is integrated by the `method` integrator: "
                                         "remove the key or set it to \"integrator\"");
+  if (root.has("motion") && s.has("full_model_variables") && o.full_variables != SimulationOptions::Variables::Physical)
+    s.problem("full_model_variables", s.key_path("full_model_variables") + " = \"" + to_string(o.full_variables) +
+                                          "\": with a prescribed [motion] the full model integrates q alone, in physical "
+                                          "coordinates; remove the key or set it to \"physical\"");
   st.nonlinear = s.boolean("nonlinear", false).value_or(st.nonlinear);
   st.perturbation = s.boolean("perturbation", false).value_or(st.perturbation);
   st.error_estimate = s.boolean("error_estimate", false).value_or(st.error_estimate);

@@ -222,7 +222,7 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
     else
       detail::generalized_force(body, x(2), x.segment(3, N - 3), *uq, *Gq);
     double p = zd.dot(*Gq);
-    if (body.damped()) p -= zd.dot((m ? m->damping() : body.damping()) * zd);
+    if (body.damped()) p -= m ? m->damping_power(zd) : zd.dot(body.damping() * zd);
     w(0) = p;
     return true;
   };

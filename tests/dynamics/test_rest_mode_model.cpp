@@ -83,5 +83,6 @@ TEST_CASE("rest-mode coordinates: the generalized force and damping carry the sa
     const double power = zd.dot(G), damping = zd.dot(body.damping() * zd);
     CHECK(yd.dot(Gy) == Approx(power).margin(1e-12));  // round-off of sums of O(1) terms
     CHECK(yd.dot(rest.damping() * yd) == Approx(damping).margin(1e-12));
+    CHECK(rest.damping_power(yd) == Approx(damping).margin(1e-12));  // by the diagonal
   }
 }

@@ -129,6 +129,11 @@ TEST_CASE("loads, actuators and simulation keys load", "[io]") {
       problems_of(kPaperBeam + "[motion.theta]\ntype = \"spin_up\"\nfinal_rate_deg_s = 180.0\nramp_time_s = 2.0\n"
                                "[simulation]\nduration_s = 1.0\nfirst_order_solver = \"taylor\"\n");
   CHECK_THAT(prescribed, Contains("first_order_solver") && Contains("prescribed [motion]"));
+  // nor other full-model variables than physical: the prescribed motion integrates q alone
+  const std::string prescribed_rest =
+      problems_of(kPaperBeam + "[motion.theta]\ntype = \"spin_up\"\nfinal_rate_deg_s = 180.0\nramp_time_s = 2.0\n"
+                               "[simulation]\nduration_s = 1.0\nfull_model_variables = \"rest_modes\"\n");
+  CHECK_THAT(prescribed_rest, Contains("full_model_variables") && Contains("prescribed [motion]") && Contains("line 11"));
   CHECK_THAT(problems_of(kPaperBeam + kLoad + "[simulation]\nduration_s = 2.0\nrtol = 1e-11\nfirst_order_solver = \"taylor\"\n"),
              Contains("rtol = 1e-11") && Contains("expected >= 1e-10"));
 }

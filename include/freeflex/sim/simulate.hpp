@@ -26,8 +26,9 @@ struct SimulationOptions {
   double trajectory_step_s = 0.0;
   /// What the integrator integrates (docs/theory.md section 8): the state [z, z'] itself
   /// (Physical); the same with q taken to the modes at rest, q = Ψ η (RestModes, the full
-  /// model only: the same steps and accuracy as Physical, a right-hand side whose cost
-  /// grows as n instead of n², about half the time at NOA 20); or modal amplitudes that
+  /// model only, and not with a prescribed motion: the same steps as Physical, a
+  /// right-hand side whose cost grows as n instead of n², a third less time at NOA 20 and
+  /// a quarter of it at NOA 40, nothing gained at NOA 4-10); or modal amplitudes that
   /// leave the free elastic oscillation out (Modal). Same equations; the modal form takes
   /// far fewer steps when the oscillation is nearly free (the first-order model always;
   /// the full model at rotation rates well below the first elastic frequency) and more
