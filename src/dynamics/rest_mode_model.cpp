@@ -124,10 +124,13 @@ struct KernelData {
   double mu, S_o;
 };
 
+enum Damping { kUndamped, kDiagonal, kDense };
+
 /// The arithmetic of rhs() on raw arrays, in three passes over the n elastic entries, four
 /// at a time (fixed lanes, so the same bits in every variant: this file is built without
-/// fused multiply-adds).
-FREEFLEX_AVX2_CLONES bool rest_mode_kernel(const KernelData& k, const double* x, double* out) {
+/// fused multiply-adds); compiled once per kind of damping.
+template <Damping kDamping>
+FREEFLEX_ALWAYS_INLINE bool rest_mode_kernel(const KernelData& k, const double* x, double* out) {
   const int n = k.n, N = 3 + n;
   const double *G = k.G, *By = k.By, *Bt = k.Bt, *L = k.L, *Ai = k.Ai, *dg = k.d, *Dz = k.Dz;
   const double mu = k.mu;
@@ -168,7 +171,7 @@ FREEFLEX_AVX2_CLONES bool rest_mode_kernel(const KernelData& k, const double* x,
   double gr0 = c * G[0] + s * G[1] + thd2 * k.S_o + 2.0 * thd * Pqd;
   double gr1 = -s * G[0] + c * G[1] + thd2 * Pq;
   double gr2 = G[2] - 2.0 * thd * qMqd;
-  if (Dz) {  // a damping that is not diagonal (the diagonal one leaves the rigid rows alone)
+  if (kDamping == kDense) {  // a damping that is not diagonal (the diagonal one leaves the rigid rows alone)
     gr0 -= c * Dz[0] + s * Dz[1];
     gr1 -= -s * Dz[0] + c * Dz[1];
     gr2 -= Dz[2];
@@ -184,8 +187,8 @@ FREEFLEX_AVX2_CLONES bool rest_mode_kernel(const KernelData& k, const double* x,
   for (; i + 4 <= n; i += 4) {
     const V4 y = load4(By + i), t = load4(Bt + i);
     V4 v = load4(G + 3 + i) + (vcm - load4(L + i)) * load4(eta + i) + (y * vcy + t * vct);
-    if (dg) v = v - load4(dg + i) * load4(etad + i);
-    if (Dz) v = v - load4(Dz + 3 + i);
+    if (kDamping == kDiagonal) v = v - load4(dg + i) * load4(etad + i);
+    if (kDamping == kDense) v = v - load4(Dz + 3 + i);
     v = v * vinv;
     store4(w + 3 + i, v);
     sy += y * v;
@@ -194,8 +197,8 @@ FREEFLEX_AVX2_CLONES bool rest_mode_kernel(const KernelData& k, const double* x,
   double By_y = util::lane_sum(sy), Bt_y = util::lane_sum(st);
   for (; i < n; ++i) {
     double v = G[3 + i] + (cm - L[i]) * eta[i] + (By[i] * cy + Bt[i] * ct);
-    if (dg) v -= dg[i] * etad[i];
-    if (Dz) v -= Dz[3 + i];
+    if (kDamping == kDiagonal) v -= dg[i] * etad[i];
+    if (kDamping == kDense) v -= Dz[3 + i];
     v *= inv_mu;
     w[3 + i] = v;
     By_y += By[i] * v;
@@ -226,6 +229,12 @@ FREEFLEX_AVX2_CLONES bool rest_mode_kernel(const KernelData& k, const double* x,
   return true;
 }
 
+FREEFLEX_AVX2_CLONES bool rest_mode_kernels(const KernelData& k, const double* x, double* out) {
+  if (k.d) return rest_mode_kernel<kDiagonal>(k, x, out);
+  if (k.Dz) return rest_mode_kernel<kDense>(k, x, out);
+  return rest_mode_kernel<kUndamped>(k, x, out);
+}
+
 }  // namespace
 
 bool rest_mode_rhs(const RestModeModel& m, RestModeModel::Data& d, const double* x,
@@ -240,7 +249,7 @@ bool rest_mode_rhs(const RestModeModel& m, RestModeModel::Data& d, const double*
     d.Dzd.noalias() = m.D_ * Eigen::Map<const Eigen::VectorXd>(x + N, N);
     k.Dz = d.Dzd.data();
   }
-  return rest_mode_kernel(k, x, d.y_dot.data());
+  return rest_mode_kernels(k, x, d.y_dot.data());
 }
 
 bool RestModeModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& y,
