@@ -10,6 +10,7 @@
 
 #include "dynamics/body_kernels.hpp"
 #include "util/avx2_clones.hpp"
+#include "util/vec4.hpp"
 #include "planar.hpp"
 
 namespace freeflex {
@@ -106,12 +107,8 @@ FREEFLEX_ALWAYS_INLINE double opaque(double x) {
 }
 
 #if defined(__GNUC__)
-typedef double V4 __attribute__((vector_size(32)));
-FREEFLEX_ALWAYS_INLINE V4 load4(const double* p) {
-  V4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
+using util::load4;
+using util::V4;
 #endif
 
 /// The body of FullModel::rhs for NN elastic coordinates known at compile time (NN > 0)
@@ -440,11 +437,21 @@ bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& 
   WU.col(1) = W.col(1);
   WU.col(2) = W.col(2);
   WU.col(3) = d.Wv;
+  if (!detail::stiffened_correction(x_dot, WU, d.Wv, d.Hq, Pq, qHq, qMq, c, s)) return false;
+  x_dot.head(N) = x.tail(N);
+  return true;
+}
+
+bool detail::stiffened_correction(Eigen::VectorXd& x_dot, const Eigen::Matrix<double, Eigen::Dynamic, 4>& WU,
+                                  const Eigen::VectorXd& Wv, const Eigen::VectorXd& Hq, double Pq, double qHq,
+                                  double qMq, double c, double s) {
+  const int n = static_cast<int>(Hq.size()), N = 3 + n;
+  auto w = x_dot.tail(N);
   Eigen::Matrix4d UWU;
-  UWU.topLeftCorner<3, 3>() = W.topLeftCorner<3, 3>();
-  UWU.block<3, 1>(0, 3) = d.Wv.head<3>();
-  UWU.block<1, 3>(3, 0) = d.Wv.head<3>().transpose();
-  UWU(3, 3) = d.Hq.dot(d.Wv.tail(n));
+  UWU.topLeftCorner<3, 3>() = WU.topLeftCorner<3, 3>();
+  UWU.block<3, 1>(0, 3) = Wv.head<3>();
+  UWU.block<1, 3>(3, 0) = Wv.head<3>().transpose();
+  UWU(3, 3) = Hq.dot(Wv.tail(n));
   Eigen::Matrix4d S = Eigen::Matrix4d::Zero();
   S(0, 2) = S(2, 0) = -Pq;
   S(1, 2) = S(2, 1) = -0.5 * qHq;
@@ -459,13 +466,12 @@ bool FullModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorXd>& 
   // model's range.
   const double det = core.determinant();
   if (!(det > kMinMassDeterminantRatio)) return false;
-  const Eigen::Vector4d Uy(w(0), w(1), w(2), d.Hq.dot(w.tail(n)));
+  const Eigen::Vector4d Uy(w(0), w(1), w(2), Hq.dot(w.tail(n)));
   const Eigen::Vector4d zc = S * core.partialPivLu().solve(Uy);
   w.noalias() -= WU * zc;
   const double wx = w(0), wy = w(1);
   w(0) = c * wx - s * wy;
   w(1) = s * wx + c * wy;
-  x_dot.head(N) = x.tail(N);
   return true;
 }
 

@@ -290,7 +290,8 @@ bool RestModeModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorX
     g(1) -= -s * d.Dzd(0) + c * d.Dzd(1);
     g.tail(N - 2) -= d.Dzd.tail(N - 2);
   }
-  // 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_y, e_θ, v], v = [0; 0; 0; H̄q] (eq. 14.5)
+  // 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_y, e_θ, v], v = [0; 0; 0; H̄q] (eq. 14.5):
+  // the columns 𝕄_η(0)⁻¹ U by the block inverse, then FullModel's correction
   auto w = d.y_dot.tail(N);
   rest_solve(g, w);
   Eigen::VectorXd v = Eigen::VectorXd::Zero(N);
@@ -301,25 +302,7 @@ bool RestModeModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorX
   WU.col(1) = W_y_;
   WU.col(2) = W_theta_;
   WU.col(3) = d.Wv;
-  Eigen::Matrix4d UWU;
-  UWU.topLeftCorner<3, 3>() = WU.topLeftCorner<3, 3>();
-  UWU.block<3, 1>(0, 3) = d.Wv.head<3>();
-  UWU.block<1, 3>(3, 0) = d.Wv.head<3>().transpose();
-  UWU(3, 3) = d.Hq.dot(d.Wv.tail(n));
-  Eigen::Matrix4d S = Eigen::Matrix4d::Zero();
-  S(0, 2) = S(2, 0) = -Pq;
-  S(1, 2) = S(2, 1) = -0.5 * qHq;
-  S(2, 2) = qMq;
-  S(0, 3) = S(3, 0) = -1.0;
-  const Eigen::Matrix4d core = Eigen::Matrix4d::Identity() + UWU * S;
-  const double det = core.determinant();  // det 𝕄_b(q) / det 𝕄_b(0), as FullModel::rhs_stiffened
-  if (!(det > detail::kMinMassDeterminantRatio)) return false;
-  const Eigen::Vector4d Uy(w(0), w(1), w(2), d.Hq.dot(w.tail(n)));
-  const Eigen::Vector4d zc = S * core.partialPivLu().solve(Uy);
-  w.noalias() -= WU * zc;
-  const double wx = w(0), wy = w(1);
-  w(0) = c * wx - s * wy;
-  w(1) = s * wx + c * wy;
+  if (!stiffened_correction(d.y_dot, WU, d.Wv, d.Hq, Pq, qHq, qMq, c, s)) return false;
   d.y_dot.head(N) = x.tail(N);
   return true;
 }

@@ -19,6 +19,7 @@
 #include "sim/rk_tableaus.hpp"
 #include "sim/stepper.hpp"
 #include "util/avx2_clones.hpp"
+#include "util/vec4.hpp"
 #include "util/finite.hpp"
 #include "util/format.hpp"
 
@@ -58,14 +59,10 @@ struct Combination {
 // SSE2 registers in the baseline); loads and stores through memcpy, no alignment assumed.
 // V4 values pass only between always-inlined helpers, so no call's ABI depends on AVX
 // (CMakeLists.txt silences GCC's -Wpsabi note for this file).
-typedef double V4 __attribute__((vector_size(32)));
-FREEFLEX_ALWAYS_INLINE V4 load(const double* p) {
-  V4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-FREEFLEX_ALWAYS_INLINE void store(double* p, V4 v) { std::memcpy(p, &v, sizeof v); }
-FREEFLEX_ALWAYS_INLINE V4 splat(double x) { return V4{x, x, x, x}; }
+using util::V4;
+FREEFLEX_ALWAYS_INLINE V4 load(const double* p) { return util::load4(p); }
+FREEFLEX_ALWAYS_INLINE void store(double* p, V4 v) { util::store4(p, v); }
+FREEFLEX_ALWAYS_INLINE V4 splat(double x) { return util::splat4(x); }
 #else
 #define FF_RK_VECTORS 0
 #endif
