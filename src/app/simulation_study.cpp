@@ -278,10 +278,18 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
   r.duration_s = options.duration_s;
   r.first_order_solver = options.first_order_solver;
   r.prescribed_motion = static_cast<bool>(motion);
+  r.method = options.integrator.method;
+  r.full_variables = motion ? SimulationOptions::Variables::Physical : options.full_variables;
+  r.first_order_variables = options.first_order_variables;
 
   const FullModel full(body);
   if (st.nonlinear) {
-    if (log) *log << "simulation: full nonlinear model, NOA " << n << ", " << options.duration_s << " s ... " << std::flush;
+    if (log)
+      *log << "simulation: full nonlinear model, NOA " << n << ", " << options.duration_s << " s"
+           << (r.full_variables == SimulationOptions::Variables::Physical
+                   ? ""
+                   : std::string(", ") + to_string(r.full_variables) + " variables")
+           << " ... " << std::flush;
     ProgressReport progress(log, options.duration_s);
     SimulationOptions o = options;
     o.integrator.progress = progress.callback();
@@ -603,8 +611,10 @@ Json to_json(const SimulationStudyResult& r) {
   js["nominal"] = r.about_maneuver ? "optimized maneuver" : "zero-order simulation";
   js["duration_s"] = r.duration_s;
   js["prescribed_motion"] = r.prescribed_motion;
+  js["method"] = to_string(r.method);
   if (r.nonlinear) {
     Json j = run_stats(*r.nonlinear);
+    j["variables"] = to_string(r.full_variables);
     if (r.nonlinear->run.ok() && r.nonlinear->drifts) {
       j["residual_vibration_energy_J"] = r.nonlinear->residual_vibration_energy_J;
       j["energy_drift_rel"] = (*r.nonlinear->drifts)(0);
@@ -619,6 +629,8 @@ Json to_json(const SimulationStudyResult& r) {
   if (r.perturbation) {
     Json j = run_stats(*r.perturbation);
     j["first_order_solver"] = to_string(r.first_order_solver);
+    if (r.first_order_solver == SimulationOptions::FirstOrderSolver::Integrator)
+      j["first_order_variables"] = to_string(r.first_order_variables);
     j["zero_order_rhs_evaluations"] = r.perturbation->zero_order_rhs_evaluations;
     j["first_order_rhs_evaluations"] = r.perturbation->first_order_rhs_evaluations;
     if (r.perturbation->run.ok()) j["residual_vibration_energy_J"] = r.perturbation->residual_vibration_energy_J;

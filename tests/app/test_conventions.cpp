@@ -169,4 +169,15 @@ TEST_CASE("summary.json spells enum values as design files do", "[api][io]") {
   CHECK(j["message"] == run.message);
   CHECK(j["studies"]["maneuver"]["status"] == "max_iterations");
   CHECK(j["studies"]["maneuver"]["transcription"] == "hermite_simpson_compressed");
+  // the simulation's integrator and variables
+  SimulationStudyResult sim;
+  sim.method = IntegratorOptions::Method::Verner98;
+  sim.full_variables = SimulationOptions::Variables::RestModes;
+  sim.nonlinear = SimulationStudyResult::Solution{};
+  sim.perturbation = SimulationStudyResult::Solution{};
+  run.simulation = sim;
+  const nlohmann::ordered_json k = summary_json(d, run);
+  CHECK(k["studies"]["simulation"]["method"] == "verner98");
+  CHECK(k["studies"]["simulation"]["nonlinear"]["variables"] == "rest_modes");
+  CHECK(k["studies"]["simulation"]["perturbation"]["first_order_variables"] == "modal");
 }

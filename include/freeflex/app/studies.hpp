@@ -123,6 +123,11 @@ struct SimulationStudyResult {
   bool about_maneuver = false;   ///< the nominal is the optimized maneuver (else the zero-order simulation)
   /// How the perturbation solution's first-order model was integrated.
   SimulationOptions::FirstOrderSolver first_order_solver = SimulationOptions::FirstOrderSolver::Integrator;
+  /// The integrator and the variables it integrated (the full model's are physical under a
+  /// prescribed motion, whatever the options say).
+  IntegratorOptions::Method method = IntegratorOptions::Method::Adams;
+  SimulationOptions::Variables full_variables = SimulationOptions::Variables::Physical;
+  SimulationOptions::Variables first_order_variables = SimulationOptions::Variables::Modal;
   double duration_s = 0.0;
   /// A solution, its table (nonlinear.csv or perturbation.csv) and its figures of merit.
   struct Solution {
