@@ -280,7 +280,8 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
   r.prescribed_motion = static_cast<bool>(motion);
   r.method = options.integrator.method;
   r.full_variables = motion ? SimulationOptions::Variables::Physical : options.full_variables;
-  r.first_order_variables = options.first_order_variables;
+  // a prescribed motion integrates q in physical coordinates, whatever the options say
+  r.first_order_variables = motion ? SimulationOptions::Variables::Physical : options.first_order_variables;
 
   const FullModel full(body);
   if (st.nonlinear) {
@@ -313,13 +314,13 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       s.drifts = Eigen::Vector3d(drift(nl_table, ce + 1, 1, t_off, E), drift(nl_table, ce + 2, 2, t_off, P),
                                  drift(nl_table, ce + 4, 1, t_off, H));
     } else if (nl.status == IntegrationStatus::Failed) {
-      fail(r, study_log, "full nonlinear simulation failed: " + nl.message + budget_hint(options, options.full_variables));
+      fail(r, study_log, "full nonlinear simulation failed: " + nl.message + budget_hint(options, r.full_variables));
     } else if (nl.ok()) {
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
     }
     if (nl.ok() && st.error_estimate && can_run("the full nonlinear model's error estimate"))
       s.error_estimate = estimate_error(
-          "full nonlinear model", nl, options, options.full_variables,
+          "full nonlinear model", nl, options, r.full_variables,
           [&](const SimulationOptions& tight) {
             return motion ? simulate_prescribed(body, ex, *motion, tight, false) : simulate_full(body, ex, tight);
           },
@@ -386,7 +387,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
       s.residual_vibration_energy_J = s.table(s.table.rows() - 1, 1 + 2 * (3 + n) + 2);
       if (st.error_estimate && can_run("the perturbation solution's error estimate"))
         s.error_estimate = estimate_error(
-            "perturbation solution", pt, options, options.first_order_variables,
+            "perturbation solution", pt, options, r.first_order_variables,
             [&](const SimulationOptions& tight) {
               if (motion) return simulate_prescribed(body, ex, *motion, tight, true);
               return (nominal ? simulate_perturbation_about(body, ex, nominal, tight)
@@ -395,7 +396,7 @@ SimulationStudyResult run_simulation_study(const Design& design, const ManeuverS
             r, study_log);
     } else if (pt.status == IntegrationStatus::Failed) {
       fail(r, study_log,
-           "perturbation simulation failed: " + pt.message + budget_hint(options, options.first_order_variables));
+           "perturbation simulation failed: " + pt.message + budget_hint(options, r.first_order_variables));
     }
     r.perturbation = std::move(s);
   }

@@ -3,19 +3,19 @@
 // the body at rest, q = Ψ η (SimulationOptions::Variables::RestModes; docs/theory.md
 // section 8, "Rest-mode coordinates"). The same equations as FullModel, whose state
 // x = [R, θ, q, R', θ', q'] maps to y = [R, θ, η, R', θ', η'] one to one; only the
-// arithmetic is cheaper. With Ψᵀ M_c Ψ = I and Ψᵀ K Ψ = Λ (rest_modes) the body-frame
-// mass matrix at rest becomes
+// arithmetic is cheaper. With Ψᵀ M_c Ψ = μ I and Ψᵀ K Ψ = μ Λ (rest_modes' modes scaled
+// by √μ, μ the mean diagonal of M, so that η is of the size of q and the integrator's
+// tolerances mean the same in both) the body-frame mass matrix at rest becomes
 //
-//     𝕄_η(0) = [[A, B], [Bᵀ, I + Bᵀ A⁻¹ B]],   A = 𝕄_rr (3 x 3), B = 𝕄_rq Ψ (3 x n),
+//     𝕄_η(0) = [[A, B], [Bᵀ, μ I + Bᵀ A⁻¹ B]],   A = 𝕄_rr (3 x 3), B = 𝕄_rq Ψ (3 x n),
 //
-// whose inverse is [[A⁻¹ + A⁻¹ B Bᵀ A⁻¹, −A⁻¹ B], [−Bᵀ A⁻¹, I]] (the Schur complement of A
-// is the identity), and Ψᵀ M Ψ = I + Bᵀ A⁻¹ B. (The code scales Ψ to Ψᵀ M_c Ψ = μ I, μ the
-// mean diagonal of M, so that η is of the size of q and the tolerances mean the same in
-// both; then μ I takes the place of I above.) So M q, K q and the solve with 𝕄_b(0),
-// dense n x n and (3+n) x (3+n) products in physical coordinates, become a few products
-// with the 3 x n matrix B: the right-hand side's cost grows as n, not n². With geometric
-// stiffening (eq. 14.5-14.6) three dense products remain, H̄ q, H̄ q' and G_c q in these
-// coordinates, against seven in physical ones. Private to src/.
+// whose inverse is [[A⁻¹ + A⁻¹ B Bᵀ A⁻¹ / μ, −A⁻¹ B / μ], [−Bᵀ A⁻¹ / μ, I / μ]] (the Schur
+// complement of A is μ I): y = 𝕄_η(0)⁻¹ g is u = A⁻¹ g_r, y_η = (g_η − Bᵀ u) / μ,
+// y_r = u − A⁻¹ B y_η; and Ψᵀ M Ψ = μ I + Bᵀ A⁻¹ B, η = Ψᵀ M_c q / μ. So M q, K q and the
+// solve with 𝕄_b(0), dense n x n and (3+n) x (3+n) products in physical coordinates,
+// become a few products with the 3 x n matrix B: the right-hand side's cost grows as n,
+// not n². With geometric stiffening (eq. 14.5-14.6) three dense products remain, H̄ q,
+// H̄ q' and G_c q in these coordinates, against seven in physical ones. Private to src/.
 #include <vector>
 
 #include <Eigen/Dense>
@@ -30,19 +30,21 @@ class RestModeModel {
   /// Workspace of one thread of evaluation: y' of the last rhs() and scratch.
   struct Data {
     Eigen::VectorXd y_dot, G, g, Dzd;
-    Eigen::VectorXd Hq, Hqd, Mq, Wv;  // scratch of the stiffened model
+    Eigen::VectorXd Hq, Hqd, Mq, Wv, v;         // scratch of the stiffened model
+    Eigen::Matrix<double, Eigen::Dynamic, 4> WU;  // its Woodbury columns
   };
 
   /// Throws std::runtime_error when the modes at rest cannot be computed.
-  explicit RestModeModel(const FlexibleBody& body);
+  /// `dense_damping` (tests): apply the damping as the full matrix even where it is diagonal.
+  explicit RestModeModel(const FlexibleBody& body, bool dense_damping = false);
   const FlexibleBody& body() const { return body_; }
   int n() const { return n_; }
   int state_size() const { return 2 * (3 + n_); }
   Data create_data() const;
-  /// Ψ: q = Ψ η (the columns are the modes, Ψᵀ M_c Ψ = I).
+  /// Ψ: q = Ψ η (the columns are the modes, Ψᵀ M_c Ψ = μ I).
   const Eigen::MatrixXd& modes() const { return Psi_; }
 
-  /// y from x = [R, θ, q, R', θ', q'] (η = Ψᵀ M_c q), and x from y.
+  /// y from x = [R, θ, q, R', θ', q'] (η = Ψᵀ M_c q / μ), and x from y.
   Eigen::VectorXd to_rest_modes(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   void to_physical(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> x) const;
 

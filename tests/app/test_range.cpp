@@ -47,6 +47,10 @@ TEST_CASE("the KRB spin-up: stiffened ok, without stiffening a warning and out_o
     // the energy balance of the prescribed motion: work of the hub against the energy (measured 4e-11)
     REQUIRE(r.nonlinear->range.energy_balance_error_rel);
     CHECK(*r.nonlinear->range.energy_balance_error_rel < 1e-8);
+    // summary.json's variables are those integrated: q in physical coordinates under a
+    // prescribed motion, whatever first_order_variables says (its default is modal)
+    CHECK(r.full_variables == SimulationOptions::Variables::Physical);
+    CHECK(r.first_order_variables == SimulationOptions::Variables::Physical);
   }
   {
     std::string off = edited(text, "geometric_stiffening = true", "geometric_stiffening = false");
