@@ -81,7 +81,7 @@ double RestModeModel::damping_power(const Eigen::Ref<const Eigen::VectorXd>& y_d
 RestModeModel::Data RestModeModel::create_data() const {
   const int N = 3 + n_;
   Data d;
-  d.y_dot.resize(2 * N);
+  d.x_dot.resize(2 * N);
   d.G.resize(N);
   d.g.resize(N);
   d.Dzd.resize(N);
@@ -257,7 +257,7 @@ bool rest_mode_rhs(const RestModeModel& m, RestModeModel::Data& d, const double*
     d.Dzd.noalias() = m.D_ * Eigen::Map<const Eigen::VectorXd>(x + N, N);
     k.Dz = d.Dzd.data();
   }
-  return rest_mode_kernels(k, x, d.y_dot.data());
+  return rest_mode_kernels(k, x, d.x_dot.data());
 }
 
 bool RestModeModel::rhs(Data& d, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -300,13 +300,13 @@ bool RestModeModel::rhs_stiffened(Data& d, const Eigen::Ref<const Eigen::VectorX
   }
   // 𝕄_b(q) = 𝕄_b(0) + U S Uᵀ, U = [e_x, e_y, e_θ, v], v = [0; 0; 0; H̄q] (eq. 14.5):
   // the columns 𝕄_η(0)⁻¹ U by the block inverse, then FullModel's correction
-  auto w = d.y_dot.tail(N);
+  auto w = d.x_dot.tail(N);
   rest_solve(g, w);
   d.v.tail(n) = d.Hq;  // its head stays zero
   rest_solve(d.v, d.Wv);
   d.WU.col(3) = d.Wv;  // the first three columns are set by create_data()
-  if (!stiffened_correction(d.y_dot, d.WU, d.Wv, d.Hq, Pq, qHq, qMq, c, s)) return false;
-  d.y_dot.head(N) = x.tail(N);
+  if (!stiffened_correction(d.x_dot, d.WU, d.Wv, d.Hq, Pq, qHq, qMq, c, s)) return false;
+  d.x_dot.head(N) = x.tail(N);
   return true;
 }
 

@@ -29,7 +29,7 @@ class RestModeModel {
  public:
   /// Workspace of one thread of evaluation: y' of the last rhs() and scratch.
   struct Data {
-    Eigen::VectorXd y_dot, G, g, Dzd;
+    Eigen::VectorXd x_dot, G, g, Dzd;  ///< x_dot: y' (these coordinates) from the last rhs(), as FullModel::Data
     Eigen::VectorXd Hq, Hqd, Mq, Wv, v;         // scratch of the stiffened model
     Eigen::Matrix<double, Eigen::Dynamic, 4> WU;  // its Woodbury columns
   };
@@ -48,7 +48,7 @@ class RestModeModel {
   Eigen::VectorXd to_rest_modes(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   void to_physical(const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> x) const;
 
-  /// y' for y under element commands u, into data.y_dot; false where the mass matrix is
+  /// y' for y under element commands u, into data.x_dot; false where the mass matrix is
   /// not positive definite, or with geometric stiffening near singular (as FullModel::rhs).
   bool rhs(Data& data, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& commands) const;
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <optional>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include "dynamics/body_kernels.hpp"
@@ -176,27 +177,22 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
   // the mass matrix left the model's range at the last evaluation (the explicit pairs
   // reject a trial step the model refuses and go on, so only the last one counts)
   auto singular = std::make_shared<bool>(false);
-  if (rest) {
-    auto data = std::make_shared<detail::RestModeModel::Data>(rest->create_data());
-    sys.rhs = [m = rest.get(), &excitation, data, u, singular](
-                  const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& y, Eigen::Ref<Eigen::VectorXd> yd) {
-      detail::evaluate_commands(excitation, at, *u);
-      *singular = !m->rhs(*data, y, *u);
-      if (*singular) return false;
-      yd = data->y_dot;
-      return true;
-    };
-  } else {
-    auto data = std::make_shared<FullModel::Data>(model->create_data());
-    sys.rhs = [m = &*model, &excitation, data, u, singular](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
-                                                            Eigen::Ref<Eigen::VectorXd> xd) {
+  // x' of either model (FullModel, or RestModeModel on its own state) under the loads
+  auto model_rhs = [&excitation, u, singular](const auto* m) {
+    auto data = std::make_shared<std::decay_t<decltype(m->create_data())>>(m->create_data());
+    return [m, &excitation, data, u, singular](const Instant& at, const Eigen::Ref<const Eigen::VectorXd>& x,
+                                               Eigen::Ref<Eigen::VectorXd> xd) {
       detail::evaluate_commands(excitation, at, *u);
       *singular = !m->rhs(*data, x, *u);
       if (*singular) return false;
       xd = data->x_dot;
       return true;
     };
-  }
+  };
+  if (rest)
+    sys.rhs = model_rhs(rest.get());
+  else
+    sys.rhs = model_rhs(&*model);
   sys.last_error = [&body] {
     return std::string(body.geometric_stiffening()
                            ? "the mass matrix came near singular or indefinite (the second-order kinetic energy no "

@@ -54,7 +54,7 @@ TEST_CASE("rest-mode coordinates: the map is one to one and the derivatives are 
       CHECK(rest.rhs(dr, y, u) == in_range);
       if (!in_range) continue;
       ++compared;
-      rest.to_physical(dr.y_dot, yd_phys);
+      rest.to_physical(dr.x_dot, yd_phys);
       worst = std::max(worst, (yd_phys - dp.x_dot).cwiseAbs().maxCoeff() / dp.x_dot.cwiseAbs().maxCoeff());
     }
     INFO("n = " << n << ", geometric stiffening " << stiffening << ", dense damping " << dense_damping << ": map "
