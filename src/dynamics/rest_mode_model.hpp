@@ -37,9 +37,6 @@ class RestModeModel {
   /// Throws std::runtime_error when the modes at rest cannot be computed.
   /// `dense_damping` (tests): apply the damping as the full matrix even where it is diagonal.
   explicit RestModeModel(const FlexibleBody& body, bool dense_damping = false);
-  const FlexibleBody& body() const { return body_; }
-  int n() const { return n_; }
-  int state_size() const { return 2 * (3 + n_); }
   Data create_data() const;
   /// Ψ: q = Ψ η (the columns are the modes, Ψᵀ M_c Ψ = μ I).
   const Eigen::MatrixXd& modes() const { return Psi_; }
@@ -66,7 +63,7 @@ class RestModeModel {
   const FlexibleBody& body_;
   int n_;
   Eigen::MatrixXd Psi_;          ///< q = Ψ η
-  Eigen::MatrixXd Psi_inverse_;  ///< Ψ⁻¹ = Ψᵀ M_c
+  Eigen::MatrixXd Psi_inverse_;  ///< Ψ⁻¹ = Ψᵀ M_c / μ
   double mu_;                    ///< Ψᵀ M_c Ψ = μ I: the mean diagonal of M
   Eigen::VectorXd L_;            ///< μ ω², the diagonal of Ψᵀ K Ψ
   Eigen::Matrix3d A_inverse_;    ///< 𝕄_rr⁻¹ at rest
