@@ -393,6 +393,44 @@ CollocationNlp::Midpoints CollocationNlp::midpoints(const Eigen::Ref<const Eigen
   return mid;
 }
 
+Eigen::VectorXd CollocationNlp::carried_bound_multipliers(const CollocationNlp& from,
+                                                          const Eigen::Ref<const Eigen::VectorXd>& z) const {
+  if (from.tr_ != tr_ || from.nz_ != nz_ || from.nx_ != nx_ || from.free_time() != free_time() ||
+      z.size() != from.n_)
+    return {};
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(n_);
+  // the places of one kind, in time order: knots (every point but the separated form's
+  // midpoints), the separated form's midpoints, the compressed form's midpoint controls
+  struct Place {
+    double tau, weight;  // time fraction; quadrature weight of its point (ctrl_'s qbar)
+    int offset;          // index of its first entry in w
+  };
+  const auto places = [](const CollocationNlp& nlp, int kind) {
+    std::vector<Place> p;
+    if (kind < 2) {
+      for (int j = 0; j < nlp.P_; ++j)
+        if (nlp.is_knot(j) == (kind == 0)) p.push_back({nlp.tau_[j], nlp.ctrl_[j].qbar, nlp.point_offset(j)});
+    } else {
+      for (int k = 0; k < nlp.num_mid_controls(); ++k)
+        p.push_back({nlp.tau_mid_[k], nlp.ctrl_[nlp.P_ + k].qbar, nlp.mid_control_offset(k)});
+    }
+    return p;
+  };
+  for (int kind = 0; kind < 3; ++kind) {
+    const std::vector<Place> mine = places(*this, kind), theirs = places(from, kind);
+    if (theirs.empty()) continue;
+    const int width = kind == 2 ? nu_ : nz_;
+    std::size_t c = 0;
+    for (const Place& p : mine) {  // both in time order: the nearest moves forward only
+      while (c + 1 < theirs.size() && std::abs(theirs[c + 1].tau - p.tau) <= std::abs(theirs[c].tau - p.tau)) ++c;
+      const double scale = theirs[c].weight > 0.0 ? p.weight / theirs[c].weight : 1.0;
+      out.segment(p.offset, width) = scale * z.segment(theirs[c].offset, width);
+    }
+  }
+  if (free_time()) out(time_index()) = z(from.time_index());
+  return out;
+}
+
 std::shared_ptr<const CollocationTrajectory> CollocationNlp::trajectory(const Eigen::Ref<const Eigen::VectorXd>& w) const {
   check_size(w);
   const int N = intervals();

@@ -56,10 +56,11 @@ class StringJournal : public Ipopt::Journal {
 /// first message is kept and reported in the result.
 class CollocationTnlp : public Ipopt::TNLP {
  public:
-  CollocationTnlp(const CollocationNlp& nlp, Eigen::VectorXd w0)
-      : nlp_(nlp), data_(nlp.create_data()), w0_(std::move(w0)) {}
+  CollocationTnlp(const CollocationNlp& nlp, Eigen::VectorXd w0, const BoundMultipliers* z0)
+      : nlp_(nlp), data_(nlp.create_data()), w0_(std::move(w0)), z0_(z0) {}
 
   Eigen::VectorXd w_final;
+  BoundMultipliers z_final;
   double obj_final = std::numeric_limits<double>::quiet_NaN();
   bool finalized = false;
   std::string error;
@@ -88,10 +89,11 @@ class CollocationTnlp : public Ipopt::TNLP {
   bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_L, Number* z_U, Index m,
                           bool init_lambda, Number* lambda) override {
     if (init_x) std::copy(w0_.data(), w0_.data() + n, x);
-    // Only asked for with warm_start_init_point = yes: no multipliers are known.
+    // Only asked for with warm_start_init_point = yes, that is with z0.
     if (init_z) {
-      std::fill(z_L, z_L + n, 0.0);
-      std::fill(z_U, z_U + n, 0.0);
+      const bool known = z0_ && z0_->lower.size() == n && z0_->upper.size() == n;
+      Eigen::Map<Eigen::VectorXd>(z_L, n) = known ? z0_->lower : Eigen::VectorXd::Zero(n);
+      Eigen::Map<Eigen::VectorXd>(z_U, n) = known ? z0_->upper : Eigen::VectorXd::Zero(n);
     }
     if (init_lambda) std::fill(lambda, lambda + m, 0.0);
     return true;
@@ -139,11 +141,15 @@ class CollocationTnlp : public Ipopt::TNLP {
     });
   }
 
-  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number*, const Number*, Index,
+  void finalize_solution(Ipopt::SolverReturn, Index n, const Number* x, const Number* z_L, const Number* z_U, Index,
                          const Number*, const Number*, Number obj_value, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
     try {
       if (x) w_final = Eigen::Map<const Eigen::VectorXd>(x, n);
+      if (z_L && z_U) {
+        z_final.lower = Eigen::Map<const Eigen::VectorXd>(z_L, n);
+        z_final.upper = Eigen::Map<const Eigen::VectorXd>(z_U, n);
+      }
       obj_final = obj_value;
       finalized = true;
     } catch (const std::exception& e) {
@@ -170,6 +176,7 @@ class CollocationTnlp : public Ipopt::TNLP {
   const CollocationNlp& nlp_;
   CollocationNlp::Data data_;  // the NLP's cache of f and ∂f at Ipopt's last point
   Eigen::VectorXd w0_;
+  const BoundMultipliers* z0_;  // the bound multipliers to start from, or none
 };
 
 std::string trim(const std::string& s) {
@@ -263,7 +270,7 @@ std::string describe(Ipopt::ApplicationReturnStatus s, const std::string& error)
 }  // namespace
 
 NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, const TrajoptOptions& o, bool check_derivatives,
-                   bool warm) {
+                   bool warm, const BoundMultipliers* z0) {
   // Quiet runs have no console journal rather than print_level 0, which would also
   // silence the journals that want the log (output_file, keep_log).
   // Every IpoptApplication made the usual way registers all of Ipopt's options anew (1.1 M
@@ -321,6 +328,10 @@ NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, c
     opts.SetStringValue("linear_solver", "mumps");
   }
   if (warm) opts.SetNumericValue("mu_init", 1e-6);  // start close to the central path of a near-optimal point
+  // A solve carried on from another mesh starts from its bound multipliers too (Ipopt's
+  // own start sets them all to 1): one iteration fewer on the shipped rigid maneuvers
+  // continued from their coarse start (docs/benchmarks.md).
+  if (warm && z0) opts.SetStringValue("warm_start_init_point", "yes");
   // The constraint multipliers start at zero instead of Ipopt's least-squares estimate,
   // which costs a factorization of a matrix of its own before the first iteration; with
   // zeros the maneuvers of bench_trajopt took the same iterations with the default LDLᵀ
@@ -345,7 +356,7 @@ NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, c
     Ipopt::SmartPtr<Ipopt::Journal> j = new StringJournal(static_cast<Ipopt::EJournalLevel>(level), &run.log);
     app->Jnlst()->AddJournal(j);
   }
-  Ipopt::SmartPtr<CollocationTnlp> tnlp = new CollocationTnlp(nlp, w0);
+  Ipopt::SmartPtr<CollocationTnlp> tnlp = new CollocationTnlp(nlp, w0, warm ? z0 : nullptr);
   try {
     status = app->OptimizeTNLP(Ipopt::SmartPtr<Ipopt::TNLP>(Ipopt::GetRawPtr(tnlp)));
   } catch (const std::exception& e) {  // Ipopt catches its own; this is a last resort
@@ -355,6 +366,7 @@ NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, c
   if (Ipopt::IsValid(app->Statistics())) run.iterations = app->Statistics()->IterationCount();
   if (tnlp->finalized) {
     run.w = tnlp->w_final;
+    run.z = std::move(tnlp->z_final);
     run.objective = tnlp->obj_final;
   }
   if (error.empty()) error = tnlp->error;

@@ -35,11 +35,21 @@ std::vector<double> refine(const std::vector<double>& sigma, const Eigen::Vector
 
 }  // namespace
 
+namespace {
+/// A solve's NLP and the bound multipliers it ended with: where the next mesh starts from.
+struct MeshMultipliers {
+  std::shared_ptr<const CollocationNlp> nlp;
+  detail::BoundMultipliers z;
+};
+}  // namespace
+
 /// `warm`: the first round starts from a near-optimal guess (Ipopt at mu_init 1e-6, as a
-/// mesh-refinement round).
+/// mesh-refinement round), with the bound multipliers of `from` when given (the same
+/// problem solved on another mesh). `last`, when given, receives the last round's.
 static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
                                          const TrajoptOptions& options, std::chrono::steady_clock::time_point start,
-                                         bool warm = false);
+                                         bool warm = false, const MeshMultipliers* from = nullptr,
+                                         MeshMultipliers* last = nullptr);
 
 Eigen::VectorXd TrajoptResult::control_at(double t_s) const {
   if (!trajectory) return Eigen::VectorXd::Zero(u.cols());
@@ -74,6 +84,7 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
   // (mu_init 1e-6); an elastic one from the default barrier, its elastic state at rest.
   int warm_iterations = 0;
   std::shared_ptr<const CollocationTrajectory> warm;
+  MeshMultipliers coarse;
   const int coarse_intervals = options.coarse_start_intervals();
   if (options.coarse_start && !options.guess.solution && !options.guess.control &&
       (problem.elastic || coarse_intervals < options.intervals)) {
@@ -89,7 +100,8 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
       if (key == "max_iter") value = std::to_string(std::min<long>(cap, std::strtol(value.c_str(), nullptr, 10)));
     ro.coarse_start = false;
     const TrajoptResult rr =
-        solve_maneuver_with(body, problem.elastic ? rigid_counterpart(problem) : problem, ro, start);
+        solve_maneuver_with(body, problem.elastic ? rigid_counterpart(problem) : problem, ro, start, false, nullptr,
+                            &coarse);
     warm_iterations = rr.iterations;
     if (rr.ok()) warm = rr.trajectory;
   }
@@ -99,7 +111,8 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
     tuned.guess.solution = warm;
     opts = &tuned;
   }
-  TrajoptResult res = solve_maneuver_with(body, problem, *opts, start, warm && !problem.elastic);
+  const bool continued = warm && !problem.elastic;
+  TrajoptResult res = solve_maneuver_with(body, problem, *opts, start, continued, continued ? &coarse : nullptr);
   res.warm_start_iterations = warm_iterations;
   res.warm_started = warm != nullptr;
   return res;
@@ -107,16 +120,28 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
 
 static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const ManeuverProblem& problem,
                                          const TrajoptOptions& options, std::chrono::steady_clock::time_point start,
-                                         bool warm) {
+                                         bool warm, const MeshMultipliers* from, MeshMultipliers* last) {
   TrajoptResult res;
   res.transcription = options.transcription;
   res.linear_solver = options.linear_solver;
   std::vector<double> mesh(static_cast<std::size_t>(options.intervals), 1.0 / options.intervals);
   InitialGuess guess = options.guess;
+  MeshMultipliers previous;  // the last round's, the next round's start
+  if (from) previous = *from;
   for (int round = 0;; ++round) {
-    const CollocationNlp nlp(body, problem, options.transcription, mesh);
+    const auto nlp_kept = std::make_shared<const CollocationNlp>(body, problem, options.transcription, mesh);
+    const CollocationNlp& nlp = *nlp_kept;
     const Eigen::VectorXd w0 = initial_point(nlp, guess);
-    const detail::NlpSolve run = detail::solve_nlp_ipopt(nlp, w0, options, round == 0, round > 0 || warm);
+    const bool warm_round = round > 0 || warm;
+    detail::BoundMultipliers z0;
+    if (warm_round && previous.nlp && previous.z.lower.size()) {
+      z0.lower = nlp.carried_bound_multipliers(*previous.nlp, previous.z.lower);
+      z0.upper = nlp.carried_bound_multipliers(*previous.nlp, previous.z.upper);
+    }
+    const bool have_z0 = z0.lower.size() == nlp.num_variables() && z0.upper.size() == nlp.num_variables();
+    detail::NlpSolve run =
+        detail::solve_nlp_ipopt(nlp, w0, options, round == 0, warm_round, have_z0 ? &z0 : nullptr);
+    previous = {nlp_kept, std::move(run.z)};
     if (round == 0 && options.derivative_test != "none")
       res.derivative_test_errors = detail::derivative_errors(run.log);
     res.log += run.log;
@@ -203,6 +228,7 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
     guess = InitialGuess{};
     guess.solution = res.trajectory;
   }
+  if (last) *last = std::move(previous);
   res.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;
 }

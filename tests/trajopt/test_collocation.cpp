@@ -354,3 +354,66 @@ TEST_CASE("bad maneuver input throws with the field, the expectation and the val
   bad_guess.guess.control = [](double) { return Eigen::VectorXd::Zero(2); };
   CHECK_THROWS_WITH(solve_maneuver(body, good, bad_guess), Contains("has 2 entries, expected 3"));
 }
+
+TEST_CASE("bound multipliers carried to another mesh: nearest place of the same kind, scaled by its weight",
+          "[trajopt]") {
+  const FlexibleBody body = rich_body();
+  const ManeuverProblem p = rich_problem(true, 1.0, 0.1, 0.0, false);
+  // The quadrature weight of each place (knot, midpoint or midpoint control) from the mesh
+  // fractions, by the rule collocation.hpp gives: trapezoid ½ σ at each end of an
+  // interval, Simpson σ/6 at the knots and 4σ/6 at the midpoint.
+  struct Place {
+    int kind;  // 0: knot, 1: midpoint point (separated HS), 2: midpoint control
+    double tau, weight;
+    int offset, width;
+  };
+  const auto places = [](const CollocationNlp& nlp) {
+    const std::vector<double>& s = nlp.mesh_fractions();
+    const int N = nlp.intervals(), nz = nlp.point_size(), nu = nz - nlp.state_size();
+    const bool trap = nlp.transcription() == Transcription::Trapezoidal;
+    const double end = trap ? 0.5 : 1.0 / 6.0;
+    std::vector<Place> out;
+    for (int j = 0; j < nlp.num_points(); ++j) {
+      if (!nlp.is_knot(j)) {
+        out.push_back({1, nlp.point_fraction(j), 4.0 / 6.0 * s[j / 2], nlp.point_offset(j), nz});
+        continue;
+      }
+      const int k = nlp.transcription() == Transcription::HermiteSimpson ? j / 2 : j;  // interval starting here
+      const double w = end * ((k > 0 ? s[k - 1] : 0.0) + (k < N ? s[k] : 0.0));
+      out.push_back({0, nlp.point_fraction(j), w, nlp.point_offset(j), nz});
+    }
+    for (int k = 0; k < nlp.num_mid_controls(); ++k)
+      out.push_back({2, nlp.mid_fraction(k), 4.0 / 6.0 * s[k], nlp.mid_control_offset(k), nu});
+    return out;
+  };
+  for (Transcription tr :
+       {Transcription::Trapezoidal, Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed}) {
+    INFO(to_string(tr));
+    const CollocationNlp coarse(body, p, tr, std::vector<double>{1.0, 2.0, 1.0, 3.0});
+    const CollocationNlp fine(body, p, tr, std::vector<double>{1.0, 1.0, 3.0, 2.0, 1.0, 4.0, 1.0, 2.0, 0.5});
+    // z on the coarse mesh: its place's weight times a value that tells places and components apart
+    const std::vector<Place> cp = places(coarse), fp = places(fine);
+    const auto value = [](const Place& pl, int c) { return 1.0 + pl.kind + 0.1 * c + 10.0 * pl.tau; };
+    Eigen::VectorXd z = Eigen::VectorXd::Constant(coarse.num_variables(), -1.0);
+    for (const Place& pl : cp)
+      for (int c = 0; c < pl.width; ++c) z(pl.offset + c) = pl.weight * value(pl, c);
+    z(coarse.time_index()) = 7.5;
+    const Eigen::VectorXd carried = fine.carried_bound_multipliers(coarse, z);
+    REQUIRE(carried.size() == fine.num_variables());
+    CHECK(carried(fine.time_index()) == 7.5);  // T's multiplier: not a pointwise bound, as it is
+    int checked = 0;
+    for (const Place& pl : fp) {
+      const Place* nearest = nullptr;  // brute force: the coarse place of the kind nearest in time
+      for (const Place& q : cp)
+        if (q.kind == pl.kind && (!nearest || std::abs(q.tau - pl.tau) < std::abs(nearest->tau - pl.tau))) nearest = &q;
+      REQUIRE(nearest);
+      for (int c = 0; c < pl.width; ++c, ++checked)
+        CHECK(carried(pl.offset + c) == Approx(pl.weight * value(*nearest, c)).epsilon(1e-12));  // round-off only
+    }
+    CHECK(checked + 1 == fine.num_variables());  // every variable is a place's or T
+  }
+  // layouts that differ: nothing carried
+  const CollocationNlp trap(body, p, Transcription::Trapezoidal, 4);
+  const CollocationNlp hs(body, p, Transcription::HermiteSimpson, 4);
+  CHECK(hs.carried_bound_multipliers(trap, Eigen::VectorXd::Ones(trap.num_variables())).size() == 0);
+}

@@ -161,8 +161,8 @@ struct TrajoptOptions {
   /// rigid counterpart, rigid_counterpart(): the same objective and limits without the
   /// elastic part) solved first on min(N, max(10, N / 8)) intervals with at most
   /// min(max_iter, 500) iterations. A rigid problem then continues from it as a
-  /// mesh-refinement round does (Ipopt's mu_init 1e-6; skipped when the coarse mesh would
-  /// not be coarser); an elastic one from the default barrier with its elastic state at
+  /// mesh-refinement round does (Ipopt's mu_init 1e-6 and the coarse mesh's bound
+  /// multipliers; skipped when the coarse mesh would not be coarser); an elastic one from the default barrier with its elastic state at
   /// rest. The slews of docs/benchmarks.md then need no large Hessian regularization
   /// (rigid, N = 100: 11-15 ms instead of 26-28; elastic NOA 6: 11 iterations instead of
   /// 19). If the coarse solve fails, the default straight line is used. Its iterations

@@ -8,7 +8,9 @@
 // in N), and the constraint multipliers started at zero (constr_mult_init_max 0: no
 // least-squares estimate, which costs a factorization of its own). TrajoptOptions::
 // ipopt_options override any of these. Mesh-refinement rounds, and the full mesh after a
-// rigid problem's coarse start, start at mu_init 1e-6 from the interpolated solution.
+// rigid problem's coarse start, start at mu_init 1e-6 from the interpolated solution and
+// the bound multipliers of the mesh before (CollocationNlp::carried_bound_multipliers,
+// Ipopt's warm_start_init_point).
 //
 //   TrajoptResult r = solve_maneuver(body, problem, options);
 //   if (r.ok()) r.trajectory->at(Instant::at(t));  // a RigidTrajectory
