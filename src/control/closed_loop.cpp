@@ -12,6 +12,7 @@
 #include "control/gauss_closed_loop.hpp"
 #include "freeflex/dynamics/full_model.hpp"
 #include "model/commands.hpp"
+#include "sim/range_check.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
@@ -322,7 +323,7 @@ ClosedLoopResult simulate_closed_loop_full(const FirstOrderModel& model, const E
     xd = data->x_dot;
     return true;
   };
-  sys.last_error = [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
+  sys.last_error = detail::mass_matrix_failure(body);
 
   std::vector<double> bp = nom.breakpoints();
   const std::vector<double> lb = loads.breakpoints();

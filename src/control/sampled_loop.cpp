@@ -8,6 +8,7 @@
 #include "freeflex/control/lqg.hpp"
 #include "freeflex/dynamics/full_model.hpp"
 #include "model/commands.hpp"
+#include "sim/range_check.hpp"
 #include "util/format.hpp"
 
 namespace freeflex {
@@ -128,7 +129,7 @@ SampledLoopResult simulate_sampled_loop(const FlexibleBody& plant, const FirstOr
     if (lag) xd.tail(m) = (u - x.tail(m)) / po.lag_s;
     return true;
   };
-  sys.last_error = [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
+  sys.last_error = detail::mass_matrix_failure(plant);
 
   auto nominal_state = [&](double t) {
     const RigidState s = nom.at(Instant::at(t));

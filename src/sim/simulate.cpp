@@ -89,6 +89,32 @@ Eigen::MatrixXd deflection_sampler(const FlexibleBody& body, int points) {
 
 namespace detail {
 
+namespace {
+/// The rotary inertia about o that the frame keeps by itself at rest, as a share of I_o:
+/// 1 / ((𝕄_b(0)⁻¹)_θθ I_o), what a moment at o meets when R and q move freely. Shape
+/// functions that nearly contain a rotation about o leave it small (docs/theory.md
+/// section 14): 1.4e-3 with the paper's six functions, 4e-5 with twenty.
+double frame_inertia_fraction(const FlexibleBody& body) {
+  const Eigen::MatrixXd M0 = body.mass_matrix(0.0, Eigen::VectorXd::Zero(body.n()));
+  const double inverse_tt = M0.ldlt().solve(Eigen::VectorXd::Unit(M0.rows(), 2))(2);
+  return 1.0 / (inverse_tt * M0(2, 2));
+}
+}  // namespace
+
+std::function<std::string()> mass_matrix_failure(const FlexibleBody& body) {
+  if (!body.geometric_stiffening())
+    return [] { return std::string("the mass matrix lost positive definiteness (state out of range)"); };
+  auto share = std::make_shared<std::optional<double>>();  // found at the first failure, kept
+  return [&body, share] {
+    if (!*share) *share = frame_inertia_fraction(body);
+    return "the mass matrix came near singular or indefinite (the second-order kinetic energy no longer holds: "
+           "state out of range; at rest the frame keeps by itself " +
+           util::format_number(**share, 2) +
+           " of the rotary inertia about o, and the smaller that share, the smaller the deflections the second-order "
+           "model takes: it falls as noa grows, so fewer shape functions widen the range, docs/theory.md section 14)";
+  };
+}
+
 std::function<std::string(const Instant&, const Eigen::Ref<const Eigen::VectorXd>&)> deflection_check(
     const FlexibleBody& body, const SimulationOptions& options, int q_offset, const Eigen::MatrixXd* to_q) {
   const Eigen::MatrixXd P = to_q ? Eigen::MatrixXd(deflection_sampler(body) * *to_q) : deflection_sampler(body);
@@ -155,16 +181,6 @@ SimulationOptions with_reusable_nominal(SimulationOptions o) {
   return o;
 }
 
-/// The rotary inertia about o that the frame keeps by itself at rest, as a share of I_o:
-/// 1 / ((𝕄_b(0)⁻¹)_θθ I_o), what a moment at o meets when R and q move freely. Shape
-/// functions that nearly contain a rotation about o leave it small (docs/theory.md
-/// section 14): 1.4e-3 with the paper's six functions, 4e-5 with twenty.
-double frame_inertia_fraction(const FlexibleBody& body) {
-  const Eigen::MatrixXd M0 = body.mass_matrix(0.0, Eigen::VectorXd::Zero(body.n()));
-  const double inverse_tt = M0.ldlt().solve(Eigen::VectorXd::Unit(M0.rows(), 2))(2);
-  return 1.0 / (inverse_tt * M0(2, 2));
-}
-
 SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excitation, const SimulationOptions& options,
                                const Eigen::VectorXd& x_initial) {
   const auto t0 = Clock::now();
@@ -203,16 +219,7 @@ SimulationResult simulate_full(const FlexibleBody& body, const Excitation& excit
     sys.rhs = model_rhs(rest.get());
   else
     sys.rhs = model_rhs(&*model);
-  auto frame_fraction = std::make_shared<double>(0.0);  // found at the first failure, kept
-  sys.last_error = [&body, frame_fraction] {
-    if (!body.geometric_stiffening()) return std::string("the mass matrix lost positive definiteness (state out of range)");
-    if (*frame_fraction == 0.0) *frame_fraction = frame_inertia_fraction(body);
-    return "the mass matrix came near singular or indefinite (the second-order kinetic energy no longer holds: "
-           "state out of range; at rest the frame keeps by itself " +
-           util::format_number(*frame_fraction, 2) +
-           " of the rotary inertia about o, and the smaller that share, the smaller the deflections the second-order "
-           "model takes: it falls as noa grows, so fewer shape functions widen the range, docs/theory.md section 14)";
-  };
+  sys.last_error = detail::mass_matrix_failure(body);
   sys.range_check = detail::deflection_check(body, options, 3, rest ? &rest->modes() : nullptr);
   // Work of the loads and the damping, ż·(G − D ż), for the energy balance (outside the
   // error test: the states are the same with or without it). Not in modal variables: their

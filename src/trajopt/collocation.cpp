@@ -416,15 +416,27 @@ Eigen::VectorXd CollocationNlp::carried_bound_multipliers(const CollocationNlp& 
     }
     return p;
   };
+  // A fixed variable of `from` (the boundary states, end commands held at zero) has no
+  // multiplier of its own (Ipopt takes it out of the problem and returns 0): the entries
+  // of a component come from the nearest place where `from` leaves it free.
+  const Bounds fb = from.bounds();
+  std::vector<const Place*> free_places;
   for (int kind = 0; kind < 3; ++kind) {
     const std::vector<Place> mine = places(*this, kind), theirs = places(from, kind);
-    if (theirs.empty()) continue;
     const int width = kind == 2 ? nu_ : nz_;
-    std::size_t c = 0;
-    for (const Place& p : mine) {  // both in time order: the nearest moves forward only
-      while (c + 1 < theirs.size() && std::abs(theirs[c + 1].tau - p.tau) <= std::abs(theirs[c].tau - p.tau)) ++c;
-      const double scale = theirs[c].weight > 0.0 ? p.weight / theirs[c].weight : 1.0;
-      out.segment(p.offset, width) = scale * z.segment(theirs[c].offset, width);
+    for (int i = 0; i < width; ++i) {
+      free_places.clear();
+      for (const Place& q : theirs)
+        if (fb.w_lower(q.offset + i) != fb.w_upper(q.offset + i)) free_places.push_back(&q);
+      if (free_places.empty()) continue;
+      std::size_t c = 0;
+      for (const Place& p : mine) {  // both in time order: the nearest (on a tie the later) moves forward only
+        while (c + 1 < free_places.size() &&
+               std::abs(free_places[c + 1]->tau - p.tau) <= std::abs(free_places[c]->tau - p.tau))
+          ++c;
+        const Place& q = *free_places[c];
+        out(p.offset + i) = (q.weight > 0.0 ? p.weight / q.weight : 1.0) * z(q.offset + i);
+      }
     }
   }
   if (free_time()) out(time_index()) = z(from.time_index());

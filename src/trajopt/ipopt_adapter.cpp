@@ -89,7 +89,8 @@ class CollocationTnlp : public Ipopt::TNLP {
   bool get_starting_point(Index n, bool init_x, Number* x, bool init_z, Number* z_L, Number* z_U, Index m,
                           bool init_lambda, Number* lambda) override {
     if (init_x) std::copy(w0_.data(), w0_.data() + n, x);
-    // Only asked for with warm_start_init_point = yes, that is with z0.
+    // Only asked for with warm_start_init_point = yes: set with z0, or by a user's
+    // ipopt_options (then zeros, which Ipopt raises to warm_start_mult_bound_push).
     if (init_z) {
       const bool known = z0_ && z0_->lower.size() == n && z0_->upper.size() == n;
       Eigen::Map<Eigen::VectorXd>(z_L, n) = known ? z0_->lower : Eigen::VectorXd::Zero(n);
@@ -328,9 +329,11 @@ NlpSolve solve_nlp_ipopt(const CollocationNlp& nlp, const Eigen::VectorXd& w0, c
     opts.SetStringValue("linear_solver", "mumps");
   }
   if (warm) opts.SetNumericValue("mu_init", 1e-6);  // start close to the central path of a near-optimal point
-  // A solve carried on from another mesh starts from its bound multipliers too (Ipopt's
-  // own start sets them all to 1): one iteration fewer on the shipped rigid maneuvers
-  // continued from their coarse start (docs/benchmarks.md).
+  // A solve carried on from another mesh starts from its bound multipliers too, through
+  // Ipopt's warm-start initializer (which also raises them to at least 1e-3 and pushes the
+  // point 1e-3 from its bounds; Ipopt's own start sets the multipliers to 1): one
+  // iteration fewer on the shipped rigid maneuvers continued from their coarse start, 3-12
+  // on the minimum-time slew with its end commands at zero (docs/benchmarks.md).
   if (warm && z0) opts.SetStringValue("warm_start_init_point", "yes");
   // The constraint multipliers start at zero instead of Ipopt's least-squares estimate,
   // which costs a factorization of a matrix of its own before the first iteration; with

@@ -138,7 +138,8 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
       z0.lower = nlp.carried_bound_multipliers(*previous.nlp, previous.z.lower);
       z0.upper = nlp.carried_bound_multipliers(*previous.nlp, previous.z.upper);
     }
-    const bool have_z0 = z0.lower.size() == nlp.num_variables() && z0.upper.size() == nlp.num_variables();
+    const bool have_z0 = z0.lower.size() == nlp.num_variables() && z0.upper.size() == nlp.num_variables() &&
+                         z0.lower.allFinite() && z0.upper.allFinite();
     detail::NlpSolve run =
         detail::solve_nlp_ipopt(nlp, w0, options, round == 0, warm_round, have_z0 ? &z0 : nullptr);
     previous = {nlp_kept, std::move(run.z)};
@@ -228,7 +229,7 @@ static TrajoptResult solve_maneuver_with(const FlexibleBody& body, const Maneuve
     guess = InitialGuess{};
     guess.solution = res.trajectory;
   }
-  if (last) *last = std::move(previous);
+  if (last && res.ok()) *last = std::move(previous);  // a failed solve's multipliers start nothing
   res.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;
 }

@@ -386,32 +386,47 @@ TEST_CASE("bound multipliers carried to another mesh: nearest place of the same 
       out.push_back({2, nlp.mid_fraction(k), 4.0 / 6.0 * s[k], nlp.mid_control_offset(k), nu});
     return out;
   };
+  // non-uniform meshes, and uniform ones whose fine places fall halfway between coarse ones
+  const std::vector<std::pair<std::vector<double>, std::vector<double>>> meshes = {
+      {{1.0, 2.0, 1.0, 3.0}, {1.0, 1.0, 3.0, 2.0, 1.0, 4.0, 1.0, 2.0, 0.5}},
+      {std::vector<double>(4, 1.0), std::vector<double>(8, 1.0)}};
   for (Transcription tr :
-       {Transcription::Trapezoidal, Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed}) {
-    INFO(to_string(tr));
-    const CollocationNlp coarse(body, p, tr, std::vector<double>{1.0, 2.0, 1.0, 3.0});
-    const CollocationNlp fine(body, p, tr, std::vector<double>{1.0, 1.0, 3.0, 2.0, 1.0, 4.0, 1.0, 2.0, 0.5});
-    // z on the coarse mesh: its place's weight times a value that tells places and components apart
-    const std::vector<Place> cp = places(coarse), fp = places(fine);
-    const auto value = [](const Place& pl, int c) { return 1.0 + pl.kind + 0.1 * c + 10.0 * pl.tau; };
-    Eigen::VectorXd z = Eigen::VectorXd::Constant(coarse.num_variables(), -1.0);
-    for (const Place& pl : cp)
-      for (int c = 0; c < pl.width; ++c) z(pl.offset + c) = pl.weight * value(pl, c);
-    z(coarse.time_index()) = 7.5;
-    const Eigen::VectorXd carried = fine.carried_bound_multipliers(coarse, z);
-    REQUIRE(carried.size() == fine.num_variables());
-    CHECK(carried(fine.time_index()) == 7.5);  // T's multiplier: not a pointwise bound, as it is
-    int checked = 0;
-    for (const Place& pl : fp) {
-      const Place* nearest = nullptr;  // brute force: the coarse place of the kind nearest in time
-      for (const Place& q : cp)
-        if (q.kind == pl.kind && (!nearest || std::abs(q.tau - pl.tau) < std::abs(nearest->tau - pl.tau))) nearest = &q;
-      REQUIRE(nearest);
-      for (int c = 0; c < pl.width; ++c, ++checked)
-        CHECK(carried(pl.offset + c) == Approx(pl.weight * value(*nearest, c)).epsilon(1e-12));  // round-off only
+       {Transcription::Trapezoidal, Transcription::HermiteSimpson, Transcription::HermiteSimpsonCompressed})
+    for (const auto& [coarse_mesh, fine_mesh] : meshes) {
+      INFO(to_string(tr) << ", " << coarse_mesh.size() << " -> " << fine_mesh.size() << " intervals");
+      const CollocationNlp coarse(body, p, tr, coarse_mesh);
+      const CollocationNlp fine(body, p, tr, fine_mesh);
+      // z on the coarse mesh: its place's weight times a value that tells places and components apart
+      const std::vector<Place> cp = places(coarse), fp = places(fine);
+      const auto value = [](const Place& pl, int c) { return 1.0 + pl.kind + 0.1 * c + 10.0 * pl.tau; };
+      Eigen::VectorXd z = Eigen::VectorXd::Constant(coarse.num_variables(), -1.0);
+      for (const Place& pl : cp)
+        for (int c = 0; c < pl.width; ++c) z(pl.offset + c) = pl.weight * value(pl, c);
+      z(coarse.time_index()) = 7.5;
+      const CollocationNlp::Bounds cb = coarse.bounds();
+      const Eigen::VectorXd carried = fine.carried_bound_multipliers(coarse, z);
+      REQUIRE(carried.size() == fine.num_variables());
+      CHECK(carried(fine.time_index()) == 7.5);  // T's multiplier: not a pointwise bound, as it is
+      int checked = 0, from_fixed_neighbour = 0;
+      for (const Place& pl : fp)
+        for (int c = 0; c < pl.width; ++c, ++checked) {
+          // brute force: the coarse place of the kind nearest in time (the later on a tie)
+          // where component c is not fixed (the boundary states are: they have no multiplier)
+          const Place* nearest = nullptr;
+          const Place* nearest_any = nullptr;
+          for (const Place& q : cp) {
+            if (q.kind != pl.kind) continue;
+            if (!nearest_any || std::abs(q.tau - pl.tau) <= std::abs(nearest_any->tau - pl.tau)) nearest_any = &q;
+            if (cb.w_lower(q.offset + c) == cb.w_upper(q.offset + c)) continue;
+            if (!nearest || std::abs(q.tau - pl.tau) <= std::abs(nearest->tau - pl.tau)) nearest = &q;
+          }
+          REQUIRE(nearest);
+          if (nearest != nearest_any) ++from_fixed_neighbour;
+          CHECK(carried(pl.offset + c) == Approx(pl.weight * value(*nearest, c)).epsilon(1e-12));  // round-off only
+        }
+      CHECK(checked + 1 == fine.num_variables());  // every variable is a place's or T
+      CHECK(from_fixed_neighbour > 0);             // the boundary states' neighbours were tried
     }
-    CHECK(checked + 1 == fine.num_variables());  // every variable is a place's or T
-  }
   // layouts that differ: nothing carried
   const CollocationNlp trap(body, p, Transcription::Trapezoidal, 4);
   const CollocationNlp hs(body, p, Transcription::HermiteSimpson, 4);

@@ -161,7 +161,8 @@ class CollocationNlp {
   /// Multipliers of variable bounds found on `from` (the same problem and transcription on
   /// another mesh), carried to this NLP's variables: each takes the multiplier of the
   /// variable of `from` of the same kind (knot, midpoint, midpoint control) and component
-  /// nearest in time, scaled by the ratio of their points' quadrature weights (a pointwise
+  /// nearest in time (on a tie the later; variables `from` fixes are passed over: they
+  /// have none), scaled by the ratio of their points' quadrature weights (a pointwise
   /// bound's multiplier grows with the weight its point carries in the objective); T's
   /// is taken as it is. Empty when the two NLPs' layouts differ.
   Eigen::VectorXd carried_bound_multipliers(const CollocationNlp& from, const Eigen::Ref<const Eigen::VectorXd>& z) const;
