@@ -99,6 +99,9 @@ TrajoptResult solve_maneuver(const FlexibleBody& body, const ManeuverProblem& pr
     for (auto& [key, value] : ro.ipopt_options)  // Ipopt's own max_iter wins over max_iter: cap it too
       if (key == "max_iter") value = std::to_string(std::min<long>(cap, std::strtol(value.c_str(), nullptr, 10)));
     ro.coarse_start = false;
+    // a starting point, not a result: its optimum differs from the full mesh's by far more
+    // than 1e-4 (the slew on 80 intervals: 5e-4 in the objective), so it is not polished
+    ro.tol = std::max(options.tol, TrajoptOptions::coarse_start_tol);
     const TrajoptResult rr =
         solve_maneuver_with(body, problem.elastic ? rigid_counterpart(problem) : problem, ro, start, false, nullptr,
                             &coarse);

@@ -160,7 +160,7 @@ struct TrajoptOptions {
   /// a coarse solution: the rigid problem (a rigid problem itself, an elastic one its
   /// rigid counterpart, rigid_counterpart(): the same objective and limits without the
   /// elastic part) solved first on min(N, max(10, N / 8)) intervals with at most
-  /// min(max_iter, 500) iterations. A rigid problem then continues from it as a
+  /// min(max_iter, 500) iterations, to coarse_start_tol. A rigid problem then continues from it as a
   /// mesh-refinement round does (Ipopt's mu_init 1e-6 and the coarse mesh's bound
   /// multipliers; skipped when the coarse mesh would not be coarser); an elastic one from the default barrier with its elastic state at
   /// rest. The slews of docs/benchmarks.md then need no large Hessian regularization
@@ -170,6 +170,11 @@ struct TrajoptOptions {
   /// solve_time_s.
   bool coarse_start = true;
   static constexpr int coarse_start_max_iter = 500;
+  /// Ipopt's tol for the coarse solve (or `tol`, if looser): it gives a starting point,
+  /// whose optimum differs from the full mesh's by more than that anyway. On the rigid
+  /// slews of docs/benchmarks.md 3-5 coarse iterations fewer than at 1e-8, the same fine
+  /// ones but for one case (4 instead of 3).
+  static constexpr double coarse_start_tol = 1e-4;
   /// The coarse mesh of coarse_start (used only when coarser than `intervals`).
   /// An eighth of the mesh: on the rigid slews of bench_trajopt 2.5-25% less work than a
   /// quarter (the fine mesh takes one or two iterations more, the coarse solve far less;
