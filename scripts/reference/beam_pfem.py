@@ -135,3 +135,15 @@ def eigenvalues(K, M, count):
             x /= np.linalg.norm(x)
         out[i] = (x @ K @ x) / (x @ M @ x)
     return out
+
+
+def hermite_cubics(xi, h):
+    """The four Hermite cubics of an element of length h at xi in [0, 1] (nodal values
+    and slopes at both ends): values, first and second derivatives along the element.
+    Used by the time-domain references (krb_spinup.py, free_spinup.py)."""
+    N = np.array([1 - 3 * xi**2 + 2 * xi**3, h * (xi - 2 * xi**2 + xi**3),
+                  3 * xi**2 - 2 * xi**3, h * (-xi**2 + xi**3)])
+    N1 = np.array([-6 * xi + 6 * xi**2, h * (1 - 4 * xi + 3 * xi**2),
+                   6 * xi - 6 * xi**2, h * (-2 * xi + 3 * xi**2)]) / h
+    N2 = np.array([-6 + 12 * xi, h * (-4 + 6 * xi), 6 - 12 * xi, h * (-2 + 6 * xi)]) / h**2
+    return N, N1, N2

@@ -71,6 +71,7 @@ import time
 
 import reexec  # noqa: F401  (first: may re-run this script with Debian's python3)
 import numpy as np
+from beam_pfem import hermite_cubics as hermite
 from scipy.integrate import solve_ivp
 import sympy as sp
 
@@ -118,16 +119,6 @@ def make_density(EA):
     def energy(loc):
         return np.asarray(fW(loc[..., 0], loc[..., 1], loc[..., 2], loc[..., 3])) + 0 * loc[..., 0]
     return grad_hess, energy
-
-
-def hermite(xi, h):
-    """Hermite cubics on an element of length h at xi in [0, 1]: values, d/ds, d2/ds2."""
-    N = np.array([1 - 3 * xi**2 + 2 * xi**3, h * (xi - 2 * xi**2 + xi**3),
-                  3 * xi**2 - 2 * xi**3, h * (-xi**2 + xi**3)])
-    N1 = np.array([-6 * xi + 6 * xi**2, h * (1 - 4 * xi + 3 * xi**2),
-                   6 * xi - 6 * xi**2, h * (-2 * xi + 3 * xi**2)]) / h
-    N2 = np.array([-6 + 12 * xi, h * (-4 + 6 * xi), 6 - 12 * xi, h * (-2 + 6 * xi)]) / h**2
-    return N, N1, N2
 
 
 # ---------------------------------------------------------------- ANCF beam

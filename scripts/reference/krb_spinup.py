@@ -61,6 +61,7 @@ import time
 
 import reexec  # noqa: F401  (first: may re-run this script with Debian's python3)
 import numpy as np
+from beam_pfem import hermite_cubics as hermite
 import scipy.linalg as sl
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
@@ -129,14 +130,6 @@ def make_density(strain):
 
 
 # ---------------------------------------------------------------- finite elements
-def hermite(xi, h):
-    """Hermite cubic shape functions on [0, h] at xi in [0, 1]: values, d/dX, d2/dX2."""
-    N = np.array([1 - 3 * xi**2 + 2 * xi**3, h * (xi - 2 * xi**2 + xi**3),
-                  3 * xi**2 - 2 * xi**3, h * (-xi**2 + xi**3)])
-    N1 = np.array([-6 * xi + 6 * xi**2, h * (1 - 4 * xi + 3 * xi**2),
-                   6 * xi - 6 * xi**2, h * (-2 * xi + 3 * xi**2)]) / h
-    N2 = np.array([-6 + 12 * xi, h * (-4 + 6 * xi), 6 - 12 * xi, h * (-2 + 6 * xi)]) / h**2
-    return N, N1, N2
 
 
 class RotatingBeam:
